@@ -8,6 +8,7 @@ JSON object on stdout; messages go to stderr. Exit statuses: :func:`main`.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import gc
 import importlib
 import os
@@ -64,11 +65,7 @@ def _one_line(text: object) -> str:
 
 
 def _one_line_warning(original: Any) -> Any:
-    """``warnings.showwarning`` printing the package's warnings as ``hexapod-kin: warning: ...``.
-
-    One line per line of the message, each distinct text once; other warnings as Python shows
-    them.
-    """
+    """``warnings.showwarning`` printing each distinct package warning ``hexapod-kin: warning``."""
     from ..exceptions import HexapodKinWarning
 
     said: set[str] = set()
@@ -108,16 +105,14 @@ def run() -> None:
 
 
 def _exit_interrupted() -> None:
-    """End an interrupted command by its own SIGINT, without the interpreter's teardown.
+    """End an interrupted command by its own SIGINT (the shell sees 130), with no teardown.
 
     The command's clean-up has run; the teardown would finalize what the interrupt left
-    half-built (a numba compile cut short). POSIX: the shell sees 130 and a calling script stops.
+    half-built (a numba compile cut short).
     """
     for stream in (sys.stdout, sys.stderr):
-        try:
+        with contextlib.suppress(Exception):  # a closed pipe: nothing more to say
             stream.flush()
-        except Exception:  # noqa: BLE001 - a closed pipe: nothing more to say
-            pass
     signal.signal(signal.SIGINT, signal.SIG_DFL)
     signal.raise_signal(signal.SIGINT)
     sys.exit(130)  # pragma: no cover - only where SIGINT's default action does not end us
@@ -229,11 +224,8 @@ def _main(argv: Sequence[str] | None, interrupted: Sequence[int] = ()) -> int:
         return 130
     except BrokenPipeError:
         # stdout closed early (| head): silence the flush at exit and stop quietly
-        try:
-            devnull = os.open(os.devnull, os.O_WRONLY)
-            os.dup2(devnull, sys.stdout.fileno())
-        except OSError:
-            pass
+        with contextlib.suppress(OSError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
     except OSError as exc:
         where = f" {exc.filename!r}" if exc.filename else ""

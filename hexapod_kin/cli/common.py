@@ -17,32 +17,6 @@ from typing import Any, NoReturn
 
 from ..exceptions import ParameterError
 
-__all__ = [
-    "OneLineParser",
-    "emit_json",
-    "Robot",
-    "check_outputs",
-    "html_page",
-    "load_source",
-    "made_by",
-    "margin_failures",
-    "matrix_text",
-    "not_achieved",
-    "numbers",
-    "output_path",
-    "pick",
-    "q_args",
-    "q_from_args",
-    "robot_args",
-    "robot_of",
-    "seed",
-    "set_params",
-    "knee_arg",
-    "velocity",
-    "walk_args",
-    "walk_options",
-]
-
 #: Image formats that ``--plot`` accepts (matplotlib writes each natively).
 PLOT_SUFFIXES = (".png", ".jpg", ".jpeg", ".svg", ".pdf")
 
@@ -65,14 +39,17 @@ class OneLineParser(argparse.ArgumentParser):
     """
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
-        fmt = kwargs.get("formatter_class")
-        if fmt is None or fmt is argparse.ArgumentDefaultsHelpFormatter:
-            kwargs["formatter_class"] = DefaultsFormatter
+        kwargs.setdefault("formatter_class", DefaultsFormatter)
         super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
         """Print ``hexapod-kin: error: <message>`` (with the subcommand) and exit 2."""
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def refused(option: str, value: Any, allowed: Any, msg: str) -> ParameterError:
+    """The :class:`ParameterError` of a bad ``option`` ``value`` (``msg``; what is ``allowed``)."""
+    return ParameterError(msg, parameter=option, value=value, allowed=allowed)
 
 
 def seed(text: str) -> int:
@@ -87,17 +64,13 @@ def seed(text: str) -> int:
 
 
 def set_params(pairs: Sequence[str] | None, source: Any = None) -> dict[str, Any]:
-    """``-s NAME=VALUE`` pairs as a dict.
+    """``-s NAME=VALUE`` pairs as a dict, fitted to a preset ``source``'s parameters.
 
-    A value is read as JSON when it is JSON (``0.06``, ``[30, 90]``, ``true``), else as a list
-    of numbers when it holds commas (``30,90,150`` → ``(30.0, 90.0, 150.0)``; ``45,`` is a
-    one-item list), else kept as text. Lists come back as tuples. With ``source`` a preset
-    name, each value is fitted to the preset's parameter: one number for a list parameter
-    becomes a one-item tuple; a list for a one-number parameter is refused.
+    A value is JSON, else comma-separated numbers (a tuple; ``45,`` is one item), else text.
 
     Raises:
-        ParameterError: A pair without ``=``; a list item that is not a finite number; a
-            list for a parameter that takes one number (each names the parameter).
+        ParameterError: A pair without ``=``, a list item not a finite number, a list for a
+            parameter that takes one number.
 
     """
     out: dict[str, Any] = {}
@@ -125,9 +98,7 @@ def _set_value(key: str, text: str) -> Any:
             return text
     except ValueError:  # an integer beyond Python's digit limit
         msg = f"-s {key}=...: a number of {len(text)} characters; numbers are SI values of a robot"
-        raise ParameterError(
-            msg, parameter=key, value=f"{text[:20]}...", allowed="a number of at most 15 digits"
-        ) from None
+        raise refused(key, f"{text[:20]}...", "a number of at most 15 digits", msg) from None
     else:
         return tuple(parsed) if isinstance(parsed, list) else parsed
     items = [t.strip() for t in text.split(",")]
@@ -146,15 +117,13 @@ def _set_value(key: str, text: str) -> Any:
                 f"-s {key}={shown}: item {i} ({one!r}) is not a finite number; a list value "
                 f"is comma-separated numbers in SI units (e.g. -s {key}=30,90,150)"
             )
-            raise ParameterError(
-                msg, parameter=key, value=text, allowed="comma-separated finite numbers"
-            )
+            raise refused(key, text, "comma-separated finite numbers", msg)
         values.append(v)
     return tuple(values)
 
 
 def _fit_to_preset(source: str, params: dict[str, Any]) -> dict[str, Any]:
-    """Values shaped as the preset's parameters take them (see :func:`set_params`)."""
+    """One number for a list parameter as a 1-tuple; a list for a one-number one refused."""
     import inspect
 
     from .. import robots
@@ -204,14 +173,7 @@ def robot_args(
     inertia: bool = False,
     feet: bool = False,
 ) -> None:
-    """Declare the one robot argument of a command: every command that takes a robot calls this.
-
-    ``SOURCE`` (optional with a ``default`` or not ``required``), ``-s/--set NAME=VALUE``
-    (repeatable), ``--package-dir DIR`` (repeatable; not for ``kinds="table"``); with ``frames``
-    ``--base``/``--tip``; with ``tool`` ``--tool X Y Z ROLL PITCH YAW``; for
-    ``kinds="legged"`` ``--foot`` (repeatable, appended; with ``feet`` for any robot) and
-    ``--foot-radius``; with ``inertia`` ``--inertia``. :func:`robot_of` reads them back, once.
-    """
+    """Declare SOURCE, ``-s``, ``--package-dir`` and what is asked for (read by robot_of)."""
     help_ = SOURCE_KINDS[kinds] + ("" if default is None else f" (default {default})")
     if default is None and required:
         p.add_argument("source", metavar="SOURCE", help=help_)
@@ -275,18 +237,7 @@ def robot_args(
 
 @dataclass(frozen=True)
 class Robot:
-    """The robot a command line names: its source and every option about it, read once.
-
-    Attributes:
-        source: SOURCE as given (a path is passed on as given: relative to the cwd).
-        params: ``-s`` values, fitted to the preset's parameters.
-        options: Keywords of :func:`hexapod_kin.load` (``base``, ``tip``, ``tool``,
-            ``inertia``, ``package_dirs``) that were given.
-        feet: ``--foot`` values parsed (:func:`~hexapod_kin.gait.legs.parse_feet`; None when
-            absent).
-        foot_radius: ``--foot-radius`` [m] (None when absent).
-
-    """
+    """The robot a command line names: SOURCE, ``-s``, keywords of :func:`hexapod_kin.load`."""
 
     source: str
     params: dict[str, Any]
@@ -301,12 +252,10 @@ class Robot:
         return load(self.source, **self.options, **self.params)
 
     def table(self, urdf: bool = False) -> Any:
-        """The parameter table (Chain or Hexapod) of a preset or table file.
-
-        With ``urdf``, a URDF source (no table) comes back as the source itself.
+        """The table (Chain or Hexapod) of a preset or table file; with ``urdf`` a URDF's source.
 
         Raises:
-            ParameterError: SOURCE is a URDF (it has no table to export) and not ``urdf``.
+            ParameterError: SOURCE is a URDF and not ``urdf``.
 
         """
         from ..sources import resolve_source
@@ -332,12 +281,7 @@ class Robot:
 
 
 def robot_of(args: argparse.Namespace) -> Robot:
-    """Read the robot arguments of :func:`robot_args` back: the command line's one parse.
-
-    Raises:
-        ParameterError: A ``-s`` pair that is not NAME=VALUE, a value that does not fit.
-
-    """
+    """Read the arguments of :func:`robot_args` back (ParameterError: a bad ``-s``)."""
     import math
 
     source = args.source
@@ -355,13 +299,8 @@ def robot_of(args: argparse.Namespace) -> Robot:
         from ..gait.legs import parse_feet
 
         feet = parse_feet(" ".join(feet))
-    return Robot(
-        source=source,
-        params=set_params(getattr(args, "set", None), source=source),
-        options=options,
-        feet=feet or None,
-        foot_radius=getattr(args, "foot_radius", None),
-    )
+    params = set_params(getattr(args, "set", None), source=source)
+    return Robot(source, params, options, feet or None, getattr(args, "foot_radius", None))
 
 
 def load_source(args: argparse.Namespace) -> Any:
@@ -374,10 +313,7 @@ def load_source(args: argparse.Namespace) -> Any:
 
 
 def q_from_args(args: argparse.Namespace, model: Any, attr: str = "q") -> Any:
-    """Joint values of ``--q`` as an array for ``model``; zeros when absent.
-
-    With ``--deg`` only the revolute joints are converted from degrees; prismatic values stay
-    in metres.
+    """``--q`` for ``model`` (zeros when absent; ``--deg`` converts the revolute joints only).
 
     Raises:
         ParameterError: Wrong number of values.
@@ -394,9 +330,7 @@ def q_from_args(args: argparse.Namespace, model: Any, attr: str = "q") -> Any:
             f"--{attr} has {q.size} values; {model.name} has {model.nq} joints "
             f"({', '.join(model.joint_names)})"
         )
-        raise ParameterError(
-            msg, parameter=f"--{attr}", value=list(values), allowed=f"{model.nq} values"
-        )
+        raise refused(f"--{attr}", list(values), f"{model.nq} values", msg)
     if getattr(args, "deg", False):
         prismatic = np.asarray(model.is_prismatic, dtype=bool)
         q = np.where(prismatic, q, np.radians(q))
@@ -404,18 +338,12 @@ def q_from_args(args: argparse.Namespace, model: Any, attr: str = "q") -> Any:
 
 
 def output_path(path: str | os.PathLike[str], option: str, suffixes: Sequence[str]) -> Path:
-    """Check an output file before any work: known suffix and a writable existing directory.
-
-    Raises:
-        ParameterError: Unknown suffix, missing directory, or a directory we cannot write.
-
-    """
+    """Check an output file before any work (ParameterError: suffix, missing or unwritable)."""
     p = Path(path)
     parent = p.parent if str(p.parent) else Path(".")
 
     def refuse(why: str, allowed: Any) -> NoReturn:
-        text = f"{option} {str(path)!r}: {why}"
-        raise ParameterError(text, parameter=option, value=str(path), allowed=allowed)
+        raise refused(option, str(path), allowed, f"{option} {str(path)!r}: {why}")
 
     if p.suffix.lower() not in suffixes:
         refuse(
@@ -430,22 +358,13 @@ def output_path(path: str | os.PathLike[str], option: str, suffixes: Sequence[st
 
 
 def made_by(args: argparse.Namespace, extra: Sequence[str] = ()) -> str:
-    """The header line of an exported file: the command that made it, short options only.
-
-    An XML comment cannot contain ``--``; output paths are left out (the same input gives the
-    same bytes wherever it is written).
-    """
+    """An exported file's header: the command, short options (no ``--``), no output path."""
     words = [args.command, args.source, *(f"-s {s}" for s in args.set or ()), *extra]
     return "made by: hexapod-kin " + " ".join(words)
 
 
 def not_achieved(why: Sequence[str]) -> int:
-    """The exit status of an answer: 0 when ``why`` is empty, else 1 and one line saying why.
-
-    The rule of every command (:func:`hexapod_kin.cli.main`): 1 is *answered but not
-    achieved* (a check of the plan fails, infeasible, a limit reached); the answer itself
-    is printed as usual.
-    """
+    """Exit status 0 when ``why`` is empty, else 1 (answered, not achieved) and one line why."""
     if not why:
         return 0
     print(f"hexapod-kin: not achieved: {'; '.join(why)}", file=sys.stderr)
@@ -453,11 +372,7 @@ def not_achieved(why: Sequence[str]) -> int:
 
 
 def walk_args(p: argparse.ArgumentParser, rate: str = "--rate") -> None:
-    """The options of a planned walk, declared once for ``gait``, ``simulate``, ``timeline gait``.
-
-    ``rate`` is the flag of the walk's sample rate (``timeline gait`` has its own ``--rate``).
-    :func:`walk_options` reads them back.
-    """
+    """The options of a planned walk (``rate``: the flag of its sample rate); see walk_options."""
     p.add_argument(
         "--pattern",
         help="phase table: tripod, wave, ripple (6 legs); crawl (4 legs); wave, ripple "
@@ -536,18 +451,12 @@ def velocity(values: Sequence[str] | None) -> tuple[float, ...] | None:
         vel = []
     if len(vel) != 3 or not all(math.isfinite(v) for v in vel):
         msg = f"--velocity {' '.join(values)!r}: three finite numbers vx,vy,wz [m/s, m/s, rad/s]"
-        raise ParameterError(
-            msg, parameter="--velocity", value=" ".join(values), allowed="vx,vy,wz"
-        )
+        raise refused("--velocity", " ".join(values), "vx,vy,wz", msg)
     return tuple(vel)
 
 
 def walk_options(args: argparse.Namespace, wb: Any) -> dict[str, Any]:
-    """The keywords of :func:`hexapod_kin.gait.walk.walk` the options of :func:`walk_args` give.
-
-    ``--pattern`` defaults to the robot's legs (``wb``): tripod for six, crawl for four, else
-    wave (:func:`hexapod_kin.gait.tables.default_pattern`).
-    """
+    """The keywords of :func:`hexapod_kin.gait.walk.walk` from :func:`walk_args`'s options."""
     from ..gait.tables import default_pattern
 
     return {
@@ -566,11 +475,7 @@ def pick(args: argparse.Namespace, *names: str) -> dict[str, Any]:
 
 
 def margin_failures(run: Any) -> list[str]:
-    """Why a planned walk is not achieved though every check passed: a negative margin.
-
-    The minimum static stability margin (the projected centre of mass) or ZMP margin (the
-    zero-moment point) below 0 [m]: the point leaves the support polygon.
-    """
+    """Why a planned walk is not achieved: a static or ZMP margin below 0 [m]."""
     why = []
     for attr, what, point in (
         ("min_margin", "static stability", "projected centre of mass"),
@@ -594,19 +499,12 @@ def check_outputs(args: argparse.Namespace) -> None:
 
 
 def html_page(model: Any, t: Any, q: Any, path: str, title: str, every: float) -> str:
-    """``--html``: the motion ``q`` at times ``t`` [s] as an offline page, a frame per ``every`` s.
-
-    Raises:
-        ParameterError: The viewer extra is missing.
-
-    """
+    """``--html``: ``q`` at ``t`` [s] as an offline page, a frame per ``every`` s."""
     try:
         from ..viewer import export_html
     except ImportError as exc:
         msg = f"--html needs the viewer (hexapod_kin.viewer): {exc}"
-        raise ParameterError(
-            msg, parameter="--html", value=path, allowed="install hexapod-kin[viewer]"
-        ) from None
+        raise refused("--html", path, "install hexapod-kin[viewer]", msg) from None
     stride = max(1, int(round(every / float(t[1] - t[0])))) if len(t) > 1 else 1
     return str(export_html(model, t[::stride], q[::stride], path, title=title))
 

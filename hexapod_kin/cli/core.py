@@ -21,6 +21,7 @@ from .common import (
     pick,
     q_args,
     q_from_args,
+    refused,
     robot_args,
     robot_of,
     seed,
@@ -29,7 +30,6 @@ from .common import (
 __all__ = ["COMMANDS", "register"]
 
 
-# ------------------------------------------------------------------------ list
 def _add_list(sub: Any) -> None:
     p = sub.add_parser("list", help="list the presets")
     p.add_argument("--json", action="store_true")
@@ -56,7 +56,6 @@ def _cmd_list(args: argparse.Namespace) -> int:
     return 0
 
 
-# ------------------------------------------------------------------------ urdf
 def _add_urdf(sub: Any) -> None:
     p = sub.add_parser("urdf", help="export the URDF of a preset or a table file")
     robot_args(p, kinds="table")
@@ -79,7 +78,6 @@ def _cmd_urdf(args: argparse.Namespace) -> int:
     return 0
 
 
-# ------------------------------------------------------------------------ fk
 def _add_fk(sub: Any) -> None:
     p = sub.add_parser("fk", help="tip transform and every intermediate transform")
     robot_args(p, frames=True, tool=True)
@@ -124,23 +122,18 @@ def _cmd_fk(args: argparse.Namespace) -> int:
         return 0
     n = len(rel)
     for j, (t, c) in enumerate(zip(rel, cum), start=1):
-        print(f"^{j - 1}T_{j}  ({frames[j - 1]} -> {frames[j]}):")
-        print(matrix_text(t))
+        print(f"^{j - 1}T_{j}  ({frames[j - 1]} -> {frames[j]}):\n{matrix_text(t)}")
         if 1 < j < n:  # ^0T_1 = ^0T_1 above; ^0T_n is the tip, printed last
-            print(f"^0T_{j}  ({frames[0]} -> {frames[j]}):")
-            print(matrix_text(c))
+            print(f"^0T_{j}  ({frames[0]} -> {frames[j]}):\n{matrix_text(c)}")
     _placement(f"^0T_{n} = T tip  ({model.base} -> {model.tip}):", tip)
     return 0
 
 
 def _placement(title: str, T: Any) -> None:
     """A placement printed: its title, the 4x4 matrix, the position [m]."""
-    print(title)
-    print(matrix_text(T))
-    print("position [m]: " + " ".join(f"{v:.6f}" for v in T[:3, 3]))
+    print(f"{title}\n{matrix_text(T)}\nposition [m]: " + " ".join(f"{v:.6f}" for v in T[:3, 3]))
 
 
-# ------------------------------------------------------------------------ jacobian
 def _add_jacobian(sub: Any) -> None:
     p = sub.add_parser("jacobian", help="frame Jacobian of the tip")
     robot_args(p, frames=True, tool=True)
@@ -191,7 +184,6 @@ def _cmd_jacobian(args: argparse.Namespace) -> int:
     return 0
 
 
-# ------------------------------------------------------------------------ demo
 def _add_demo(sub: Any) -> None:
     p = sub.add_parser("demo", help="export the leg URDF, print its FK and Jacobian")
     p.add_argument("--out", default="out", help="directory for the exported URDF")
@@ -212,8 +204,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         msg = f"--out {args.out!r}: cannot create the directory ({exc.strerror})"
-        allowed = "a writable directory"
-        raise ParameterError(msg, parameter="--out", value=args.out, allowed=allowed) from None
+        raise refused("--out", args.out, "a writable directory", msg) from None
     output_path(out / "hexabot_leg.urdf", "--out", (".urdf",))
     path = write_urdf(leg, out / "hexabot_leg.urdf", header="made by: hexapod-kin demo")
     print(f"wrote {path}")
@@ -221,15 +212,12 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     q_deg = (20.0, 30.0, 45.0)
     q = np.radians(q_deg)
     print(f"q = ({', '.join(f'{v:g}' for v in q_deg)}) deg  (hip, knee, ankle)")
-    print("T foot in base:")
-    print(matrix_text(model.fk(q)))
-    print("J (local_world_aligned):")
-    print(matrix_text(model.jacobian(q)))
+    print(f"T foot in base:\n{matrix_text(model.fk(q))}")
+    print(f"J (local_world_aligned):\n{matrix_text(model.jacobian(q))}")
     print(f"det(J_position) = {np.linalg.det(model.position_jacobian(q)):.6e}")
     return 0
 
 
-# ------------------------------------------------------------------------ derive
 def _add_derive(sub: Any) -> None:
     p = sub.add_parser(
         "derive", help="symbolic T, p, J (direct/indirect), det J factored, singular families"
@@ -283,13 +271,11 @@ def _phase(end: float, make: Callable[[], Iterator[Any]]) -> tuple[list[Any], bo
 def _derive_job(
     rows: Any, fmt: str, budget: float, jac_pin: Any, qs: Any, pinned: tuple[Any, str, str]
 ) -> Iterator[tuple[str, Any]]:  # pragma: no cover - runs in the child process
-    """``derive``'s work within ``budget`` CPU seconds, in one child process.
+    """``derive``'s work within ``budget`` CPU seconds, in one child process (no Pinocchio).
 
-    The derivation (the disk cache read, the stages) until :data:`_AFTER` is left, the
-    formulas printed (``fmt``: ``"text"``, ``"json"`` or ``"latex"``) until half of it is
-    left, then the check against Pinocchio's Jacobians ``jac_pin`` at ``qs`` (computed by the
-    parent: no Pinocchio here). Yields the derivation, the output and
-    what was cut, the check and why it is incomplete.
+    Yields the derivation (until :data:`_AFTER` is left), the formulas as ``fmt`` (until half
+    of it) and what was cut, the check against the parent's ``jac_pin`` at ``qs`` and why
+    it is incomplete.
     """
     import dataclasses
     import json
@@ -414,7 +400,6 @@ def _cmd_derive(args: argparse.Namespace) -> int:
     return status
 
 
-# ------------------------------------------------------------------------ scan
 #: ``--families`` choice -> ``scan(families=...)``.
 _FAMILIES: dict[str, bool | str] = {"derive": True, "cached": "cached", "off": False}
 
@@ -499,7 +484,6 @@ def _cmd_scan(args: argparse.Namespace) -> int:
     return status
 
 
-# ------------------------------------------------------------------------ main
 Command = tuple[Callable[[Any], None], Callable[[argparse.Namespace], int]]
 
 #: Subcommands in help order: (declare arguments, run).

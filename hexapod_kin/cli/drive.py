@@ -47,12 +47,8 @@ def _cmd_drive(args: argparse.Namespace) -> int:
     from ..exceptions import ParameterError
 
     if not 0 <= args.port <= 65535:
-        raise ParameterError(
-            f"--port {args.port!r} is not allowed; give 0 (a free port) or 1..65535",
-            parameter="--port",
-            value=args.port,
-            allowed="0..65535",
-        )
+        msg = f"--port {args.port!r} is not allowed; give 0 (a free port) or 1..65535"
+        raise ParameterError(msg, parameter="--port", value=args.port, allowed="0..65535")
     end = serve_end(args)
     from ..drive import drive  # after the checks: a refusal imports no server
 

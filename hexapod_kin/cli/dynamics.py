@@ -28,7 +28,6 @@ from .common import (
 __all__ = ["register"]
 
 
-# ------------------------------------------------------------------------ pendulum
 def _add_pendulum(sub: Any) -> None:
     p = sub.add_parser(
         "pendulum",
@@ -78,12 +77,9 @@ def _cmd_pendulum(args: argparse.Namespace) -> int:
             raise ParameterError(msg, parameter=opt, value=value, allowed="(0, 180) deg")
     from ..dynamics import pendulum_experiment
 
-    exp = pendulum_experiment(
-        math.radians(args.theta0_deg),
-        args.damping,
-        decay_theta0=math.radians(args.decay_theta0_deg),
-        **pick(args, "dt", "duration", "method", "length", "mass"),
-    )
+    kw = pick(args, "dt", "duration", "method", "length", "mass")
+    decay = math.radians(args.decay_theta0_deg)
+    exp = pendulum_experiment(math.radians(args.theta0_deg), args.damping, decay_theta0=decay, **kw)
     written = []
     if args.plot:
         from ..report.figures import plot_pendulum
@@ -141,7 +137,6 @@ def _pendulum_html(exp: Any, args: argparse.Namespace) -> str:
     return html_page(model, run.simulation.t, run.simulation.q, args.html, title, 1 / 30)
 
 
-# ------------------------------------------------------------------------ torques
 def _add_torques(sub: Any) -> None:
     p = sub.add_parser(
         "torques",
@@ -208,7 +203,6 @@ def _cmd_torques(args: argparse.Namespace) -> int:
     return 0
 
 
-# ------------------------------------------------------------------------ stand
 def _add_stand(sub: Any) -> None:
     p = sub.add_parser(
         "stand",
@@ -225,7 +219,6 @@ def _add_stand(sub: Any) -> None:
         "--body-height",
         dest="height",
         type=float,
-        default=None,
         help="body above the ground [m] (default: a Hexapod 0.10; other robots their own)",
     )
     p.add_argument(
@@ -258,13 +251,9 @@ def _cmd_stand(args: argparse.Namespace) -> int:
     robot = robot_of(args)
     model = robot.load()
     hexa = hexapod_model(model)
-    st = stand(
-        model,
-        legs=None if args.legs is None else [int(v) if v.isdigit() else v for v in args.legs],
-        feet=robot.feet,
-        foot_radius=robot.foot_radius,
-        **pick(args, "height", "reach", "shift", "method", "mu", "knee"),
-    )
+    legs = None if args.legs is None else [int(v) if v.isdigit() else v for v in args.legs]
+    given = pick(args, "height", "reach", "shift", "method", "mu", "knee")
+    st = stand(model, legs=legs, feet=robot.feet, foot_radius=robot.foot_radius, **given)
     name = hexa.name if hexa is not None else robot.source
     out = {"source": name, **st.to_dict()}
     gt = None
@@ -275,10 +264,8 @@ def _cmd_stand(args: argparse.Namespace) -> int:
         kw: dict[str, Any] = {"body_height": st.height}
         if args.reach is not None:
             kw["foot_reach"] = args.reach
-        wb = as_whole_body(
-            hexa.params if hexa is not None else model,
-            **({} if hexa is not None else {"feet": robot.feet, "foot_radius": robot.foot_radius}),
-        )
+        own = {} if hexa is not None else {"feet": robot.feet, "foot_radius": robot.foot_radius}
+        wb = as_whole_body(hexa.params if hexa is not None else model, **own)
         run = walk(wb, pattern=args.gait, duration=args.gait_duration, knee=args.knee, **kw)
         gt = gait_torques(run, hexa, method=args.method, mu=args.mu)
         out["gait"] = {"walk": run.to_dict(), **gt.to_dict()}

@@ -12,16 +12,13 @@ from .common import emit_json, made_by, output_path, pick, robot_args, robot_of
 __all__ = ["register"]
 
 
-# ------------------------------------------------------------------------ xacro
 def _add_xacro(sub: Any) -> None:
     p = sub.add_parser(
         "xacro", help="parametric xacro (a macro per leg family, a property per dimension)"
     )
     robot_args(p, kinds="table")
-    p.add_argument("-l", "--leg", default=None, help="hexapod only: one leg with its mount")
-    p.add_argument(
-        "-o", "--output", default=None, help="file to write (atomically); stdout if unset"
-    )
+    p.add_argument("-l", "--leg", help="hexapod only: one leg with its mount")
+    p.add_argument("-o", "--output", help="file to write (atomically); stdout if unset")
     p.add_argument(
         "-x", "--expand", action="store_true", help="print/write the expanded URDF instead"
     )
@@ -47,7 +44,6 @@ def _cmd_xacro(args: argparse.Namespace) -> int:
     return 0
 
 
-# ------------------------------------------------------------------------ export-package
 def _add_package(sub: Any) -> None:
     p = sub.add_parser(
         "export-package",
@@ -55,9 +51,7 @@ def _add_package(sub: Any) -> None:
     )
     robot_args(p, kinds="table")
     p.add_argument("-o", "--out", required=True, help="package folder to create")
-    p.add_argument(
-        "-n", "--name", default=None, help="ROS package name (default <robot>_description)"
-    )
+    p.add_argument("-n", "--name", help="ROS package name (default <robot>_description)")
     p.add_argument("-m", "--meshes", action="store_true", help="STL visuals in meshes/ (trimesh)")
     p.add_argument("-f", "--force", action="store_true", help="replace a non-empty --out folder")
     p.add_argument("--maintainer", default="hexapod_kin user", help="package.xml maintainer")
@@ -84,21 +78,18 @@ def _cmd_package(args: argparse.Namespace) -> int:
     return 0
 
 
-# ------------------------------------------------------------------------ mjcf
 def _add_mjcf(sub: Any) -> None:
     p = sub.add_parser(
         "mjcf",
         help="MJCF for MuJoCo (its own URDF compiler), with damping, limits, inertials, a floor",
     )
     robot_args(p)
-    p.add_argument("-o", "--output", default=None, help="MJCF file to write; stdout if unset")
+    p.add_argument("-o", "--output", help="MJCF file to write; stdout if unset")
     p.add_argument("-m", "--meshes", action="store_true", help="STL visuals in <stem>_meshes/")
     p.add_argument("--no-floor", action="store_true", help="no floor plane and light")
-    p.add_argument(
-        "--floor-z", type=float, default=None, help="floor height [m] (default: below reach)"
-    )
-    p.add_argument("--timestep", type=float, default=None, help="option timestep [s]")
-    p.add_argument("--integrator", default=None, help="Euler, RK4, implicit or implicitfast")
+    p.add_argument("--floor-z", type=float, help="floor height [m] (default: below reach)")
+    p.add_argument("--timestep", type=float, help="option timestep [s]")
+    p.add_argument("--integrator", help="Euler, RK4, implicit or implicitfast")
     p.add_argument(
         "--floating", action="store_true", help="robots: a free joint on the body (it can fall)"
     )
@@ -123,9 +114,8 @@ def _cmd_mjcf(args: argparse.Namespace) -> int:
         print(f"wrote {args.output}", file=sys.stderr)
         return 0
     if args.meshes:
-        raise ParameterError(
-            "--meshes writes mesh files beside the MJCF; give -o FILE", parameter="meshes"
-        )
+        msg = "--meshes writes mesh files beside the MJCF; give -o FILE"
+        raise ParameterError(msg, parameter="meshes")
     sys.stdout.write(to_mjcf(src, **kwargs).xml)
     return 0
 

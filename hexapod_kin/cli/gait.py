@@ -57,9 +57,8 @@ def _cmd_gait(args: argparse.Namespace) -> int:
     check_outputs(args)
     robot = robot_of(args)
     if args.view and (args.source != "hexapod" or robot.params):
-        raise ParameterError(
-            "--view plays the built-in hexapod; use --html for other robots", parameter="view"
-        )
+        msg = "--view plays the built-in hexapod; use --html for other robots"
+        raise ParameterError(msg, parameter="view")
     model = robot.load()
     wb = as_whole_body(model, feet=robot.feet, foot_radius=robot.foot_radius)
     # a check that fails raises GaitError: one line, exit status 1 (cli.main)
@@ -90,10 +89,8 @@ SPEED_CHECKS = ("joint speed", "joint acceleration", "reach")
 def planned_walk(wb: Any, options: dict[str, Any]) -> Any:
     """:func:`~hexapod_kin.gait.walk.walk` with the options of :func:`.common.walk_options`.
 
-    A walk that asks more than the robot can (a joint too fast, a foot out of reach) fails
-    with the highest straight speed of its pattern for this robot added to the message
-    (:func:`~hexapod_kin.gait.walk.highest_speed`); ``simulate`` and ``timeline gait`` plan
-    through it too.
+    A walk asking more than the robot can fails with its pattern's highest straight speed
+    (:func:`~hexapod_kin.gait.walk.highest_speed`) in the message.
 
     Raises:
         GaitError: A check fails (exit status 1).
@@ -111,12 +108,10 @@ def planned_walk(wb: Any, options: dict[str, Any]) -> Any:
             v, stride, period = highest_speed(wb, **options)
         except HexapodKinError:  # pragma: no cover - the search plans what walk planned
             raise exc from None
-        top = (
-            f"the highest straight speed of {options.get('pattern')!s} for this robot is "
-            f"{v:.3g} m/s (--stride {stride:.3g} --period {period:.3g})"
-            if v > 0
-            else f"no stride of {options.get('pattern')!s} is within this robot's reach"
-        )
+        top = f"no stride of {options.get('pattern')!s} is within this robot's reach"
+        if v > 0:
+            top = f"the highest straight speed of {options.get('pattern')!s} for this robot is "
+            top += f"{v:.3g} m/s (--stride {stride:.3g} --period {period:.3g})"
         exc.message = f"{exc}; {top}"  # the same error (check, leg, time...), told more
         exc.args = (exc.message,)
         raise exc from None

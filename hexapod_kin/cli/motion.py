@@ -11,7 +11,6 @@ import math
 import sys
 from typing import Any, Literal
 
-from ..exceptions import ParameterError
 from .common import (
     check_outputs,
     emit_json,
@@ -22,6 +21,7 @@ from .common import (
     pick,
     q_args,
     q_from_args,
+    refused,
     robot_args,
 )
 
@@ -32,7 +32,6 @@ def _angle(args: argparse.Namespace, v: float) -> float:
     return math.radians(v) if args.deg else v
 
 
-# ------------------------------------------------------------------------ ik
 def _add_ik(sub: Any) -> None:
     p = sub.add_parser(
         "ik", help="inverse kinematics: position, position + yaw or 6-D pose (closed form + DLS)"
@@ -86,9 +85,7 @@ def _target(args: argparse.Namespace) -> Any:
     if args.pose is not None:
         if args.yaw is not None:
             msg = "--yaw goes with --target, not --pose (the pose has its own rpy)"
-            raise ParameterError(
-                msg, parameter="--yaw", value=args.yaw, allowed="only with --target"
-            )
+            raise refused("--yaw", args.yaw, "only with --target", msg)
         from .._pose import Pose
 
         return Pose.of([*args.pose[:3], *(_angle(args, v) for v in args.pose[3:])], "--pose").matrix
@@ -172,7 +169,6 @@ def _cmd_ik(args: argparse.Namespace) -> int:
     return status
 
 
-# ------------------------------------------------------------------------ step
 def _add_step(sub: Any) -> None:
     p = sub.add_parser(
         "step",
@@ -343,11 +339,9 @@ def _constant(args: argparse.Namespace, model: Any, q0: Any) -> int:
     vel = np.array(args.velocity if args.twist is None else args.twist, dtype=float)
     if args.twist is not None and args.deg:
         vel[3:] = np.radians(vel[3:])
-    label = (
-        f"velocity {vel.tolist()} m/s (base axes)"
-        if args.twist is None
-        else f"twist {vel.tolist()} m/s, rad/s in the {args.frame} frame"
-    )
+    label = f"twist {vel.tolist()} m/s, rad/s in the {args.frame} frame"
+    if args.twist is None:
+        label = f"velocity {vel.tolist()} m/s (base axes)"
     kw = pick(args, "frame", "method", "gain")
     tr = motion.resolved_rate(model, vel, q0, args.dt, args.duration, **kw)
     twist = vel if vel.size == 6 else np.append(vel, np.zeros(3))

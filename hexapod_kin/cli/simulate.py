@@ -10,6 +10,7 @@ from typing import Any
 from .common import (
     margin_failures,
     not_achieved,
+    refused,
     robot_args,
     robot_of,
     seed,
@@ -43,7 +44,6 @@ def register(sub: Any) -> None:
             "(pip install 'hexapod-kin[export]'; --robust and --control also proxsuite: "
             "'hexapod-kin[export,control]')."
         ),
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     robot_args(p, kinds="legged", default="hexapod", inertia=True)
     walk_args(p)
@@ -153,33 +153,28 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
 def _check_control_options(args: argparse.Namespace) -> None:
     """Refuse ``--control`` with a second verdict, and its own options without it."""
-    from ..exceptions import ParameterError
-
-    def refuse(msg: str, option: str, value: Any, allowed: str) -> ParameterError:
-        return ParameterError(msg, parameter=option, value=value, allowed=allowed)
-
     if args.control and (args.robust or args.mjcf):
         other = "--robust" if args.robust else "--mjcf"
         msg = f"--control cannot be combined with {other}"
-        raise refuse(msg, "--control", other, "--control alone, or with --html")
+        raise refused("--control", other, "--control alone, or with --html", msg)
     extra = (args.bumps != 0.0, args.seed != 0, bool(args.push), args.payload is not None)
     given = [name for name, on in zip(("--bumps", "--seed", "--push", "--payload"), extra) if on]
     if given and not args.control:
         msg = "needs --control (the open-loop replay alone takes neither bumps nor pushes here)"
-        raise refuse(f"{given[0]} {msg}", given[0], given[0], "with --control")
+        raise refused(given[0], given[0], "with --control", f"{given[0]} {msg}")
     if args.control:
         from ..control import Payload, Push
         from ..simulate.scene import MAX_BUMPS
 
         if not (math.isfinite(args.bumps) and 0.0 <= args.bumps <= MAX_BUMPS):
             msg = f"--bumps {args.bumps!r}: an amplitude from 0 to {MAX_BUMPS:g} m"
-            raise refuse(msg, "--bumps", args.bumps, f"[0, {MAX_BUMPS:g}]")
+            raise refused("--bumps", args.bumps, f"[0, {MAX_BUMPS:g}]", msg)
         args.push = [Push.parse(text) for text in args.push or []]
         if args.payload is not None:
             args.payload = Payload.parse(args.payload)
         if args.bumps and args.terrain not in (None, "flat"):
             msg = f"--bumps {args.bumps!r} on --terrain {args.terrain}: bumps on flat ground only"
-            raise refuse(msg, "--bumps", args.bumps, "--terrain flat")
+            raise refused("--bumps", args.bumps, "--terrain flat", msg)
 
 
 def _print_members(rob: dict[str, Any]) -> None:

@@ -10,7 +10,7 @@ import argparse
 import sys
 from typing import Any
 
-from .common import check_outputs, emit_json, load_source, q_args, q_from_args, robot_args
+from .common import check_outputs, emit_json, load_source, q_args, q_from_args, refused, robot_args
 
 __all__ = ["register", "serve_end", "serve_until", "wait_args"]
 
@@ -40,13 +40,9 @@ def serve_end(args: argparse.Namespace) -> float | None:
     """
     import time
 
-    from ..exceptions import ParameterError
-
     if args.serve_for is not None and not (0.0 <= args.serve_for <= 1e7):
         msg = f"--serve-for {args.serve_for!r} is not allowed; give seconds in [0, 1e7]"
-        raise ParameterError(
-            msg, parameter="--serve-for", value=args.serve_for, allowed="seconds in [0, 1e7]"
-        )
+        raise refused("--serve-for", args.serve_for, "seconds in [0, 1e7]", msg)
     return None if args.serve_for is None else time.monotonic() + args.serve_for
 
 
@@ -68,7 +64,6 @@ def serve_until(viewer: Any, args: argparse.Namespace) -> int:
     return 0
 
 
-# ------------------------------------------------------------------------ view
 def _add_view(sub: Any) -> None:
     p = sub.add_parser("view", help="show a model in the browser (meshcat server on 127.0.0.1)")
     robot_args(p, frames=True)
@@ -93,7 +88,6 @@ def _cmd_view(args: argparse.Namespace) -> int:
         return serve_until(viewer, args)
 
 
-# ------------------------------------------------------------------------ animate
 def _add_animate(sub: Any) -> None:
     p = sub.add_parser(
         "animate",

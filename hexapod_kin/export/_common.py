@@ -72,9 +72,7 @@ def held_interrupt() -> Iterator[Callable[[], None]]:
 
 
 def need(module: str, extra: str = "export") -> Any:
-    """Import an optional dependency or raise :class:`OptionalDependencyError` with the hint.
-
-    The import runs with Ctrl-C held (:func:`held_interrupt`): trimesh's import swallows it.
+    """Import an optional dependency with Ctrl-C held (:func:`held_interrupt`: trimesh's).
 
     Raises:
         OptionalDependencyError: If ``module`` is not installed.
@@ -84,9 +82,6 @@ def need(module: str, extra: str = "export") -> Any:
         with held_interrupt():
             return importlib.import_module(module)
     except ImportError:
-        raise OptionalDependencyError(
-            f"{module} is not installed; `pip install 'hexapod-kin[{extra}]'` installs xacro, "
-            "mujoco and trimesh",
-            parameter="module",
-            value=module,
-        ) from None
+        hint = f"`pip install 'hexapod-kin[{extra}]'` installs xacro, mujoco and trimesh"
+        msg = f"{module} is not installed; {hint}"
+        raise OptionalDependencyError(msg, parameter="module", value=module) from None

@@ -53,10 +53,8 @@ def _material(visual: Any) -> str:
 def add_collisions(urdf_text: str) -> str:
     """``urdf_text`` with a primitive ``<collision>`` per colliding visual (deterministic).
 
-    Links that already have collision elements are left as they are. A robot body's box
-    (material ``body``) that holds leg mounts (its child joints' origins) collides as the
-    box trimmed to leave them outside (:func:`_clip_box`): the legs start at their mounts and
-    would otherwise touch the body they hang from.
+    Links with collision elements are left as they are; a body box holding leg mounts
+    collides trimmed to leave them outside (:func:`_clip_box`).
 
     Raises:
         UrdfError: If the text is not XML.
@@ -78,7 +76,7 @@ def add_collisions(urdf_text: str) -> str:
             geom = visual.find("geometry")
             if geom is None or _material(visual) not in COLLIDING_MATERIALS:
                 continue
-            if geom.find("mesh") is not None:
+            if geom.find("mesh") is not None:  # a mesh visual has no primitive twin
                 continue
             coll = etree.Element("collision")
             origin = visual.find("origin")
@@ -98,12 +96,7 @@ def add_collisions(urdf_text: str) -> str:
 
 
 def _clip_box(size: np.ndarray, points: list[np.ndarray]) -> str | None:
-    """The box ``size`` trimmed so that none of ``points`` is strictly inside (None: none is).
-
-    The largest box trimmed along one horizontal axis (x or y, whichever keeps more of it).
-    A body box drawn around its legs' mounts would otherwise collide with the legs it
-    carries (their first links start inside it).
-    """
+    """The box ``size`` trimmed along x or y (the larger) to leave ``points`` out (or None)."""
     half = 0.5 * np.asarray(size, dtype=float)
     inside = [p for p in points if np.all(np.abs(p) < half - 1e-12)]
     if not inside:
@@ -114,9 +107,7 @@ def _clip_box(size: np.ndarray, points: list[np.ndarray]) -> str | None:
         trimmed[axis] = min(abs(float(p[axis])) for p in inside)
         if trimmed[axis] > 0 and (best is half or np.prod(trimmed) > np.prod(best)):
             best = trimmed
-    if best is half:
-        return None
-    return " ".join(f"{v:.6g}" for v in 2.0 * best)
+    return None if best is half else " ".join(f"{v:.6g}" for v in 2.0 * best)
 
 
 def _floats(text: str | None, n: int, default: float = 0.0) -> np.ndarray:
@@ -156,13 +147,7 @@ def _primitive(geom: Any, material: str) -> Any:
 
 @dataclass(frozen=True)
 class MeshedUrdf:
-    """A URDF whose visuals are STL meshes, and those meshes.
-
-    Attributes:
-        urdf: The URDF text (visual ``<mesh filename="PREFIX<file>"/>``).
-        files: Mesh file name (without the prefix) → binary STL bytes, sorted by name.
-
-    """
+    """A URDF whose visuals are STL meshes, and ``files``: name (no prefix) → STL bytes, sorted."""
 
     urdf: str
     files: dict[str, bytes]
@@ -175,9 +160,8 @@ class MeshedUrdf:
 def mesh_visuals(urdf_text: str, uri_prefix: str) -> MeshedUrdf:
     """Replace the primitive visuals of every link by STL meshes (one per link and material).
 
-    Collision primitives are added first (:func:`add_collisions`), so collisions stay simple.
-
-    ``uri_prefix`` goes before each file name in ``<mesh filename=...>`` (e.g. ``"meshes/"``).
+    Collision primitives are added first (:func:`add_collisions`); ``uri_prefix`` goes before
+    each file name in ``<mesh filename=...>`` (e.g. ``"meshes/"``).
 
     Raises:
         OptionalDependencyError: If trimesh is not installed.

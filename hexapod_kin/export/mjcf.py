@@ -36,13 +36,7 @@ INTEGRATORS = ("Euler", "RK4", "implicit", "implicitfast")
 
 @dataclass(frozen=True)
 class MjcfExport:
-    """An MJCF document and the mesh files it references.
-
-    Attributes:
-        xml: The MJCF text.
-        assets: Mesh file path (as written in the MJCF, relative to it) → STL bytes.
-
-    """
+    """An MJCF document (``xml``) and its mesh files (``assets``: path relative to it → STL)."""
 
     xml: str
     assets: dict[str, bytes]
@@ -103,10 +97,7 @@ _FLOOR_REL, _FLOOR_ABS = 1e-6, 1e-12
 
 
 def _lift_degenerate(root: Any) -> None:
-    """Raise principal moments within ``_FLOOR_REL`` of zero to that floor (in place).
-
-    A clearly negative moment is a defect left for MuJoCo to refuse.
-    """
+    """Raise principal moments within ``_FLOOR_REL`` of zero to it (a negative one: MuJoCo's)."""
     keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
     at = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
     for inertia in root.iterfind("link/inertial/inertia"):
@@ -128,8 +119,7 @@ def _lift_degenerate(root: Any) -> None:
 
 
 def _set(elem: Any, key: str, values: Any) -> None:
-    arr = np.atleast_1d(np.asarray(values, dtype=float))
-    elem.set(key, vec(arr))
+    elem.set(key, vec(np.atleast_1d(np.asarray(values, dtype=float))))
 
 
 def _patch(root: Any, model: Any, mujoco: Any) -> None:
@@ -156,12 +146,10 @@ def _patch(root: Any, model: Any, mujoco: Any) -> None:
                 _set(joint, "range", model.jnt_range[jid])
             if model.jnt_actfrclimited[jid]:
                 _set(joint, "actuatorfrcrange", model.jnt_actfrcrange[jid])
-            for key, arr in (
-                ("damping", model.dof_damping),
-                ("frictionloss", model.dof_frictionloss),
-            ):
-                if float(arr[dof]) != 0.0 or joint.get(key) is not None:
-                    joint.set(key, num(arr[dof]))
+            for key in ("damping", "frictionloss"):
+                value = getattr(model, f"dof_{key}")[dof]
+                if float(value) != 0.0 or joint.get(key) is not None:
+                    joint.set(key, num(value))
         geoms = body.findall("geom")
         adr, n = int(model.body_geomadr[b]), int(model.body_geomnum[b])
         if len(geoms) != n:
@@ -183,10 +171,7 @@ def _patch(root: Any, model: Any, mujoco: Any) -> None:
 
 
 def _exclude_adjacent(root: Any) -> None:
-    """No contacts between a body and its parent (MuJoCo only filters moving parents).
-
-    A body is also excluded with every welded (jointless) ancestor up to the first that moves.
-    """
+    """No contacts of a body with its parent and welded ancestors (MuJoCo: moving ones only)."""
     from lxml import etree
 
     def moves(body: Any) -> bool:
@@ -251,11 +236,9 @@ def to_mjcf(
     """Return the MJCF of a source, compiled by MuJoCo (deterministic).
 
     Args:
-        source: What :func:`hexapod_kin.load` takes (resolved by
-            :func:`~hexapod_kin.sources.resolve_source`): a chain, a robot, a preset name, a
-            table file, a URDF path or text, ``erd:NAME``. A URDF without a parameter table is
-            used without its mesh geometry (primitives, inertials and joints kept; no
-            reach-based floor).
+        source: What :func:`hexapod_kin.load` takes; a URDF without a parameter table is used
+            without its mesh geometry (primitives, inertials and joints kept; no reach-based
+            floor).
         meshes: STL visuals (trimesh) as non-colliding mesh geoms (group 1); the primitive
             collision geoms move to group 3.
         mesh_prefix: Folder of the mesh files relative to the MJCF file.
@@ -264,14 +247,11 @@ def to_mjcf(
         floor_z: Floor height in [m]; default just below everything the robot can reach.
         timestep: ``<option timestep>`` in [s] (> 0); default MuJoCo's (0.002 s).
         integrator: ``<option integrator>``: one of :data:`INTEGRATORS`; default MuJoCo's.
-        floating: Give the root body (a robot's body) a free joint ``floating_base`` (qpos
-            ``x y z qw qx qy qz`` first), so the robot can fall, stand and walk on the floor
-            (a Hexapod or a robot's URDF; not a chain).
-        balance_inertia: Mend a URDF from elsewhere with rounded inertials: principal
-            moments within 1e-6 of zero (relative to the link's largest; dummy and sensor
-            links with ``ixx = 0``) are raised to that floor, and MuJoCo raises those that
-            break the triangle inequality ``A + B >= C`` (``balanceinertia``). Off: such a
-            URDF is refused, and the MJCF's inertias are the URDF's.
+        floating: A free joint ``floating_base`` on the root body (qpos ``x y z qw qx qy qz``
+            first): the robot can fall, stand and walk (a Hexapod or a robot's URDF).
+        balance_inertia: Mend rounded inertials: principal moments within 1e-6 of zero
+            (relative to the link's largest) raised to that floor, and MuJoCo's
+            ``balanceinertia`` for ``A + B >= C``. Off: such a URDF is refused.
 
     Raises:
         ParameterError: Invalid timestep, integrator, floor height or source; ``floating``
@@ -331,12 +311,10 @@ def to_mjcf(
         if geom.get("type") != "mesh":
             geom.set("group", "3")
     if timestep is not None or integrator is not None:
-        option = etree.Element("option")
-        if timestep is not None:
-            option.set("timestep", num(timestep))
-        if integrator is not None:
-            option.set("integrator", integrator)
-        root.find("compiler").addnext(option)
+        given = {"timestep": None if timestep is None else num(timestep), "integrator": integrator}
+        root.find("compiler").addnext(
+            etree.Element("option", {k: v for k, v in given.items() if v is not None})
+        )
     if floor:
         world = root.find("worldbody")
         z = default_floor if floor_z is None else float(floor_z)

@@ -42,14 +42,7 @@ EXEC_DEPENDS = tuple(
 
 @dataclass(frozen=True)
 class PackageExport:
-    """What :func:`export_package` wrote.
-
-    Attributes:
-        path: The package folder.
-        name: The ROS package name.
-        files: Paths of the files written, relative to ``path``, sorted.
-
-    """
+    """What :func:`export_package` wrote: the folder, the ROS package name, the files (sorted)."""
 
     path: Path
     name: str
@@ -100,8 +93,7 @@ def package_files(
     """The package name and its files (path relative to the package → bytes, sorted).
 
     Args:
-        source: A :class:`~hexapod_kin.params.Chain`, a :class:`~hexapod_kin.params.Hexapod`,
-            a preset name or a table file (any source with a parameter table).
+        source: Any source with a parameter table (a Chain, a Hexapod, a preset, a file).
         name: ROS package name (REP 144); default ``<robot>_description``.
         meshes: STL visuals (trimesh) in ``meshes/`` (``package://<name>/meshes/...``).
         header: Header line recorded in every file (the command that made it).
@@ -157,11 +149,9 @@ def package_files(
     files["launch/display.launch.py"] = launch
     root = src.base if isinstance(src, Chain) else src.body
     files["rviz/display.rviz"] = _template("display.rviz", fixed_frame=root, header=made)
-    visuals = (
-        "STL meshes in `meshes/` (generated with trimesh from the link primitives)"
-        if meshes
-        else "primitives (cylinders, spheres, boxes)"
-    )
+    visuals = "primitives (cylinders, spheres, boxes)"
+    if meshes:
+        visuals = "STL meshes in `meshes/` (generated with trimesh from the link primitives)"
     files["README.md"] = _template(
         "README.md",
         name=pkg,
@@ -184,8 +174,7 @@ def export_package(
         source: A source with a parameter table (as :func:`package_files`).
         out: The package folder to create (its parent must exist).
         force: Replace ``out`` if it exists and is not empty.
-        **options: The keywords of :func:`package_files` (``name``, ``meshes``, ``header``,
-            ``maintainer``, ``email``, ``license``).
+        **options: The keywords of :func:`package_files`.
 
     Raises:
         ParameterError: Invalid name/e-mail/source, missing parent folder, or ``out`` exists

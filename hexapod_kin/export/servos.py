@@ -84,20 +84,13 @@ class Servo:
         need(sign in (1, -1), "direction", f"direction {sign!r}; allowed: 1 or -1", (1, -1))
         for name in ("offset", "centre"):
             need(math.isfinite(getattr(self, name)), name, f"{name} must be finite", "finite")
-        tpr, upr = self.ticks_per_revolution, self.us_per_rad
-        need(
-            self.units != "ticks" or (tpr is not None and math.isfinite(tpr) and tpr >= 1),
-            "ticks_per_revolution",
-            "units 'ticks' need ticks_per_revolution >= 1 (e.g. 1228.8 for 1024 ticks over "
-            f"300°), got {tpr!r}",
-            ">= 1",
-        )
-        need(
-            self.units != "us" or (upr is not None and math.isfinite(upr) and upr >= 1),
-            "us_per_rad",
-            f"units 'us' need us_per_rad >= 1 (a PWM servo: some 500 to 650), got {upr!r}",
-            ">= 1",
-        )
+        for unit, key, e_g in (
+            ("ticks", "ticks_per_revolution", "e.g. 1228.8 for 1024 ticks over 300°"),
+            ("us", "us_per_rad", "a PWM servo: some 500 to 650"),
+        ):
+            v = getattr(self, key)
+            ok = self.units != unit or (v is not None and math.isfinite(v) and v >= 1)
+            need(ok, key, f"units {unit!r} need {key} >= 1 ({e_g}), got {v!r}", ">= 1")
         if self.limits is not None:
             lo, hi = self.limits
             text = f"limits {list(self.limits)} must be finite with lowest < highest"
@@ -115,28 +108,16 @@ class Servo:
         key = "centre" if not abs(self.zero) <= MAX_COMMAND else key
         reach = abs(self.zero) + self.scale * 4.0 * math.pi
         within = f"commands within ±{MAX_COMMAND:g}"
-        need(
-            reach <= MAX_COMMAND,
-            key,
-            f"{key} {getattr(self, key)!r} maps two turns to {reach:g} {self.units}; "
-            f"allowed: {within}",
-            within,
-        )
-        need(
-            not self.step > 0 or self.step / self.scale <= 2.0 * math.pi,
-            key,
-            f"{key} {getattr(self, key)!r} makes one step of {self.step:g} {self.units} "
-            f"{self.step / self.scale:g} rad; allowed: at most one turn",
-            "at most one turn per step",
-        )
-        need(
-            not self.step > 0 or reach / self.step < 2.0**52,
-            "resolution",
-            f"resolution {self.step!r} is too fine for commands up to {reach:g} {self.units} "
-            "(more than 2^52 steps)",
-            f">= {reach / 2.0**52:.3g}" if self.step > 0 else "",
-            value=self.step,
-        )
+        text = f"{key} {getattr(self, key)!r} maps two turns to {reach:g} {self.units}"
+        need(reach <= MAX_COMMAND, key, f"{text}; allowed: {within}", within)
+        ok = not self.step > 0 or self.step / self.scale <= 2.0 * math.pi
+        text = f"{key} {getattr(self, key)!r} makes one step of {self.step:g} {self.units}"
+        turn = "at most one turn"
+        need(ok, key, f"{text} {self.step / self.scale:g} rad; allowed: {turn}", f"{turn} per step")
+        ok = not self.step > 0 or reach / self.step < 2.0**52
+        text = f"resolution {self.step!r} is too fine for commands up to {reach:g} {self.units}"
+        least = f">= {reach / 2.0**52:.3g}" if self.step > 0 else ""
+        need(ok, "resolution", f"{text} (more than 2^52 steps)", least, value=self.step)
 
     @property
     def scale(self) -> float:
@@ -177,14 +158,12 @@ class Servo:
     def check_range(self, lower: float, upper: float) -> None:
         """Refuse a servo that cannot drive a joint of limits [lower, upper] [rad or m].
 
-        The centre (``offset``) must lie within a turn (2π) of the joint's range, the angles
-        the servo's own ``limits`` reach must overlap it, and a step of the ``resolution`` must
-        lie within that overlap. Infinite limits check nothing.
+        The ``offset`` within a turn of the joint's range, the angles the servo's ``limits``
+        reach overlapping it, a step of the ``resolution`` within that (infinite limits: no
+        check).
 
         Raises:
-            ParameterError: Naming the joint, the key (``offset``, ``limits``, or
-                ``resolution`` when no step of it lies within both ranges), the value and the
-                allowed range.
+            ParameterError: Naming the joint, the key, the value and the allowed range.
 
         """
         lo, hi = float(lower), float(upper)
@@ -214,12 +193,7 @@ class Servo:
             self._check_steps(lo, hi)
 
     def _check_cover(self, lower: float, upper: float, reach: float) -> None:
-        """Refuse a µs or ticks scale whose servo limits sweep < :data:`MIN_COVER` of the joint.
-
-        ``reach``: the joint angles [rad or m] the servo's limits span. A servo that moves a
-        joint of 3 rad by 0.002 rad end to end is a unit slip in the scale (µs per degree
-        given per radian, ticks per degree...), refused before any walk is planned.
-        """
+        """Refuse a µs/ticks scale whose limits sweep ``reach`` < MIN_COVER of the joint's range."""
         span = upper - lower
         key = {"ticks": "ticks_per_revolution", "us": "us_per_rad"}.get(self.units)
         if key is None or self.limits is None or not (span > 0 and reach < MIN_COVER * span):
@@ -295,12 +269,11 @@ class Calibration:
     ) -> None:
         """Refuse a listed joint not in ``joint_names`` and a servo that cannot drive its joint.
 
-        A typo would go unnoticed. With the joints' ``lower``/``upper`` limits [rad or m] every
-        joint's servo (unlisted ones through the defaults) is held to :meth:`Servo.check_range`.
+        With the joints' ``lower``/``upper`` limits [rad or m] every joint's servo is held to
+        :meth:`Servo.check_range`.
 
         Raises:
-            ParameterError: An unknown joint (naming it and the joints allowed); a range or
-                offset incompatible with the joint's limits.
+            ParameterError: An unknown joint (naming the joints allowed); a servo unfit.
 
         """
         extra = [j for j in self.servos if j not in joint_names]
@@ -320,13 +293,7 @@ class Calibration:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], name: str | None = None) -> Calibration:
-        """Build from a file's data (``defaults`` and ``joints`` tables; see the module doc).
-
-        Args:
-            data: The file's values.
-            name: The file, named in errors (None: none named).
-
-        """
+        """Build from a file's data (see the module doc); ``name``: the file, named in errors."""
 
         def refuse(why: str, value: Any, allowed: Any) -> ParameterError:
             return _bad(why, "calibration", value, allowed)
@@ -369,11 +336,8 @@ def _servo(joint: str, entry: Mapping[str, Any]) -> Servo:
 def read_calibration(path: str | os.PathLike[str], robot: Any = None) -> Calibration:
     """Read a calibration file (``.yaml``/``.yml``, ``.toml`` or ``.json``).
 
-    With ``robot`` (a model: ``joint_names``, ``lower``, ``upper``) every entry must name one
-    of its joints and fit that joint's limits (:meth:`Calibration.check_joints`).
-
-    The file goes through the package's one strict reader (:mod:`hexapod_kin._reader`: a
-    regular file of at most 1 MB, UTF-8, no key given twice, YAML alias and depth caps).
+    Through the strict reader (:mod:`hexapod_kin._reader`); with ``robot`` (``joint_names``,
+    ``lower``, ``upper``) every entry must fit one of its joints (:meth:`Calibration.check_joints`).
 
     Example (AX-12-like servos: 1024 ticks over 300°, centre 512)::
 

@@ -85,18 +85,14 @@ def _identity() -> Calibration:
 
 @dataclass(frozen=True)
 class Timeline:
-    """A plan resampled for servos (arrays read-only).
+    """A plan resampled for servos (arrays read-only), its ``calibration``, rate and interpolation.
 
     Attributes:
         t: (N,) sample times [s], ``k / rate``.
-        joint_names: The joints, in column order.
-        q: (N, J) joint angles of the commands sent [rad] (the servo values mapped back).
-        qdot: (N, J) joint rates [rad/s].
-        command: (N, J) servo commands in each servo's units (rounded to its resolution).
-        speed: (N, J) servo speeds in servo units per second.
-        calibration: The servos used.
-        rate: Samples per second [Hz].
-        interpolation: ``"linear"`` or ``"cubic"``.
+        q: (N, J) joint angles of the commands sent [rad] (the servo values mapped back);
+            ``qdot`` (N, J) their rates [rad/s]; columns in ``joint_names`` order.
+        command: (N, J) servo commands in each servo's units (rounded to its resolution);
+            ``speed`` (N, J) in servo units per second.
 
     """
 
@@ -162,7 +158,7 @@ class Timeline:
             "points:",
         ]
         for k in range(len(self.t)):
-            sec, nanosec = _duration(float(self.t[k]))
+            sec, nanosec = divmod(int(round(float(self.t[k]) * 1e9)), 1_000_000_000)
             out += [
                 "- positions: [" + ", ".join(_num(v) for v in self.q[k]) + "]",
                 "  velocities: [" + ", ".join(_num(v) for v in self.qdot[k]) + "]",
@@ -190,13 +186,6 @@ class Timeline:
 
 def _num(v: float) -> str:
     return repr(float(v))
-
-
-def _duration(t: float) -> tuple[int, int]:
-    """``builtin_interfaces/Duration`` of ``t`` [s]: (sec, nanosec), nanosec in [0, 1e9)."""
-    ns = int(round(t * 1e9))
-    sec, nanosec = divmod(ns, 1_000_000_000)
-    return int(sec), int(nanosec)
 
 
 FORMATS: tuple[str, ...] = ("csv", "json", "ros2")
@@ -272,11 +261,9 @@ def _model_speed_limits(plan: Any, velocity_limit: Any, n: int) -> np.ndarray:
 
 def _model_position_limits(plan: Any, position_limit: Any, n: int) -> np.ndarray:
     """(2, n) joint limits [rad or m]: given, else the plan's robot's ``lower``/``upper``."""
-    if position_limit is not None:
-        lo, hi = position_limit
-    else:
-        robot = getattr(plan, "robot", None)
-        lo, hi = getattr(robot, "lower", None), getattr(robot, "upper", None)
+    robot = getattr(plan, "robot", None)
+    own = (getattr(robot, "lower", None), getattr(robot, "upper", None))
+    lo, hi = own if position_limit is None else position_limit
     out = np.array([np.full(n, -np.inf), np.full(n, np.inf)])
     if lo is None or hi is None:
         return out
@@ -334,27 +321,24 @@ def timeline(
 
     Args:
         plan: A ``GaitRun``, a resolved-rate ``Trajectory``, anything with ``t`` and ``q``
-            (and optionally ``qdot``, ``joint_names``, ``robot``), a ``(times, q)`` pair or
-            (N, J) joint angles with ``times=`` (an IK path) [rad].
+            (optionally ``qdot``, ``joint_names``, ``robot``), a ``(times, q)`` pair or (N, J)
+            joint angles [rad] with ``times`` (an IK path).
+        times: (N,) times [s] of an array plan.
         rate: Samples per second [Hz]; samples at ``t0 + k / rate`` up to the plan's end.
         interpolation: ``"linear"`` or ``"cubic"`` (see the module doc).
-        calibration: A :class:`Calibration`, a calibration file, or None (every joint in rad,
-            unlimited).
-        times: (N,) times [s] of an array plan.
+        calibration: A :class:`Calibration`, a file, or None (every joint in rad, unlimited).
         joint_names: The plan's joint names (default: the plan's own, else joint1..J).
-        velocity_limit: Speed limits [rad/s], scalar or (J,), used where the calibration
-            gives none (default: the plan's robot's ``velocity_limit``, else unlimited).
-        position_limit: The joints' ``(lower, upper)`` limits, each (J,) [rad or m]
-            (default: the plan's robot's ``lower``/``upper``, else none): every resampled
-            sample must lie within them (1e-9 of slack).
+        velocity_limit: Speed limits [rad/s], scalar or (J,), where the calibration gives
+            none (default: the plan's robot's, else unlimited).
+        position_limit: ``(lower, upper)``, each (J,) [rad or m] (default: the plan's robot's,
+            else none): every sample within them (1e-9 of slack).
 
     Raises:
         LimitError: A sample beyond a servo's limits, a joint's limits or its speed limit
-            (the message names the joint, the time [s] and the value; ``parameter`` is the
-            joint).
+            (naming the joint, the time [s] and the value; ``parameter`` is the joint).
         ConfigurationError: A malformed plan.
-        ParameterError: Bad rate, interpolation or calibration (a calibration is checked
-            against the joints' limits before any sample: :meth:`Calibration.check_joints`).
+        ParameterError: Bad rate, interpolation or calibration (checked against the joints'
+            limits before any sample: :meth:`Calibration.check_joints`).
 
     """
     if interpolation not in INTERPOLATIONS:
@@ -363,10 +347,9 @@ def timeline(
     if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
         raise _bad(f"rate {rate!r} must be a positive number [Hz]", "rate", rate, "> 0")
     t, q, qdot, names = _plan_arrays(plan, times, joint_names)
-    if isinstance(calibration, Calibration):
-        cal = calibration
-    else:
-        cal = _identity() if calibration is None else read_calibration(calibration)
+    cal = calibration
+    if not isinstance(cal, Calibration):
+        cal = _identity() if cal is None else read_calibration(cal)
     plim = _model_position_limits(plan, position_limit, len(names))
     cal.check_joints(names, plim[0], plim[1])
     servos = [cal.servo(j) for j in names]
@@ -471,11 +454,7 @@ def read_timeline(path: str | os.PathLike[str], fmt: str | None = None) -> Timel
     raw = read_text(p, "timeline", _MAX_TIMELINE_BYTES)
     try:
         with named(p, "timeline", SourceError):
-            if kind == "json":
-                return _read_json(raw, p)
-            if kind == "csv":
-                return _read_csv(raw, p)
-            return _read_ros2(raw, p)
+            return {"json": _read_json, "csv": _read_csv, "ros2": _read_ros2}[kind](raw, p)
     except _MALFORMED as exc:
         raise _not_a(exc, "timeline", p, f"a hexapod-kin {kind} timeline") from None
 
@@ -485,22 +464,15 @@ def _read_json(raw: str, p: Path) -> Timeline:
     if d.get("format") != FORMAT:
         raise KeyError("format")
     t = np.asarray(numbers(d["t"], "t"), dtype=float)
-    return _from_commands(
-        t,
-        texts(d["joint_names"], "joint_names"),
-        np.asarray(numbers(d["command"], "command"), dtype=float).reshape(len(t), -1),
-        np.asarray(numbers(d["speed"], "speed"), dtype=float).reshape(len(t), -1),
-        Calibration.from_dict(d["calibration"]),
-        number(d["rate"], "rate"),
-        text(d["interpolation"], "interpolation"),
-    )
+    n, names = len(t), texts(d["joint_names"], "joint_names")
+    cmd, speed = (np.asarray(numbers(d[k], k), float).reshape(n, -1) for k in ("command", "speed"))
+    cal = Calibration.from_dict(d["calibration"])
+    how = (number(d["rate"], "rate"), text(d["interpolation"], "interpolation"))
+    return _from_commands(t, names, cmd, speed, cal, *how)
 
 
 def _csv(text: str, name: str, what: str) -> tuple[dict[str, str], tuple[str, ...], np.ndarray]:
-    """``# key: value`` lines, the column names (units dropped) and the (N, columns) numbers.
-
-    The numbers pass the strict reader's (:func:`hexapod_kin._reader.csv_table`).
-    """
+    """``# key: value`` lines, the column names (units dropped) and the numbers (csv_table's)."""
     meta, header, rows = csv_table(text, name, what)
     names = tuple(h.rsplit(" [", 1)[0] for h in header)
     return meta, names, np.array(rows, dtype=float).reshape(len(rows), len(header))
@@ -513,15 +485,8 @@ def _read_csv(text: str, p: Path) -> Timeline:
     n = (len(columns) - 1) // 2
     names = columns[1 : 1 + n]
     cal = Calibration.from_dict(parse_data(meta["calibration"], str(p), "json", "timeline"))
-    return _from_commands(
-        data[:, 0].copy(),
-        names,
-        data[:, 1 : 1 + n].copy(),
-        data[:, 1 + n :].copy(),
-        cal,
-        float(meta["rate"]),
-        meta["interpolation"],
-    )
+    cols = (data[:, 0].copy(), names, data[:, 1 : 1 + n].copy(), data[:, 1 + n :].copy())
+    return _from_commands(*cols, cal, float(meta["rate"]), meta["interpolation"])
 
 
 def _read_ros2(text: str, p: Path) -> Timeline:

@@ -278,13 +278,6 @@ def _document(
     return "\n".join([*lines, "</robot>"]) + "\n"
 
 
-def _chain_doc(chain: Chain, header: str | None) -> str:
-    fam = _families([chain])[0]
-    body = [*_macro_lines(fam, forward=True), f'  <xacro:{fam.macro} prefix="" parent=""/>']
-    props = _properties(fam.params, notes=fam.notes)
-    return _document(chain.name, chain.description or chain.name, header, props, body)
-
-
 def _mount_props(legs: tuple[Any, ...]) -> tuple[list[str], dict[str, str]]:
     """Mount properties and the xyz expression per leg (circle form when the legs are on one)."""
     zs = {leg.xyz[2] for leg in legs}
@@ -362,9 +355,12 @@ def to_xacro(source: Any, *, leg: str | None = None, header: str | None = None) 
 
     """
     src = table_of(source, leg)
-    if isinstance(src, Chain):
-        return _chain_doc(src, header)
-    return _robot_doc(src, leg, header)
+    if not isinstance(src, Chain):
+        return _robot_doc(src, leg, header)
+    fam = _families([src])[0]
+    body = [*_macro_lines(fam, forward=True), f'  <xacro:{fam.macro} prefix="" parent=""/>']
+    props = _properties(fam.params, notes=fam.notes)
+    return _document(src.name, src.description or src.name, header, props, body)
 
 
 def write_xacro(

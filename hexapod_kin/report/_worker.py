@@ -56,14 +56,9 @@ def _job(
 class NumericHalf:
     """The numeric half of a build in a child process (or here, if the child cannot do it).
 
-    Args:
-        ctx: The build's :class:`~hexapod_kin.report.checks.Context` (the child makes its
-            own :class:`~.experiments.Experiments` with the same ``quick``).
-        fdir: The figures' folder.
-        out: The report's folder (the animations).
-        animations: Whether the step and walk animations are written.
-        walk_s: Duration of the hexapod's walk in [s].
-
+    ``ctx``: the build's :class:`~hexapod_kin.report.checks.Context` (the child makes its own
+    :class:`~.experiments.Experiments`); figures into ``fdir``, animations into ``out``;
+    ``walk_s``: the hexapod's walk [s].
     """
 
     def __init__(self, ctx: Any, fdir: Path, out: Path, animations: bool, walk_s: float) -> None:

@@ -8,6 +8,7 @@ earlier build replays it (:mod:`.replay`). Nothing heavy is imported at module l
 
 from __future__ import annotations
 
+import contextlib
 import json
 import time
 from collections import Counter
@@ -83,20 +84,13 @@ def _section(v: Verdict) -> str:
 
 @dataclass(frozen=True)
 class Report:
-    """A built report.
+    """A built report: its folder, ``report.md``, ``report.html``, verdicts and other facts.
 
     Attributes:
-        out: The report folder.
-        markdown: Path of ``report.md``.
-        html: Path of ``report.html``.
-        verdicts: Every verdict, in claims-file order.
-        facts: Other computed figures (scan family counts, standing, walking).
         seconds: Wall time of this run in [s] (of the replay when replayed).
-        replayed_from: UTC time (``YYYY-MM-DDTHH:MM:SSZ``) of the build whose files this run
-            copied (same source, claims, options and libraries; see :mod:`.replay`), or
-            ``None``: computed by this run.
-        build_seconds: Wall time in [s] of the build that computed the report (this run's
-            ``seconds`` unless replayed).
+        replayed_from: UTC time (``YYYY-MM-DDTHH:MM:SSZ``) of the build this run copied
+            (:mod:`.replay`), or ``None``: computed by this run.
+        build_seconds: Wall time in [s] of the build that computed the report.
 
     """
 
@@ -147,12 +141,11 @@ def reproduce(
     """Redo every result of the four seeds, compare, and write the report into ``out``.
 
     ``quick``: reduced sizes; ``animations``: the step and walk animations (the ``viewer``
-    extra); ``cache``: replay an earlier build with the same inputs (:mod:`.replay`), else
-    compute again (and store). The :class:`Report` says whether it was replayed.
+    extra); ``cache``: replay an earlier build with the same inputs (:mod:`.replay`).
 
     Raises:
-        ParameterError: A file of ``out`` cannot be written (a full disk or a read-only
-            folder is found before the build; the folders this call made are removed).
+        ParameterError: A file of ``out`` cannot be written (found before the build; the
+            folders this call made are removed).
 
     """
     start = time.perf_counter()
@@ -163,10 +156,8 @@ def reproduce(
         return _reproduce(out, quick=quick, animations=animations, cache=cache, start=start)
     except BaseException:
         for folder in made:  # deepest first; only the folders this call made, when empty
-            try:
+            with contextlib.suppress(OSError):
                 folder.rmdir()
-            except OSError:
-                pass
         raise
 
 
@@ -184,10 +175,8 @@ def _probe(out: Path) -> None:
     """Make ``out`` and write one byte in it (then remove it): a write that will fail, fails now."""
 
     def refuse(why: str) -> ParameterError:
-        allowed = "a folder that can be written"
-        return ParameterError(
-            f"out={str(out)!r}: {why}", parameter="out", value=str(out), allowed=allowed
-        )
+        text, allowed = f"out={str(out)!r}: {why}", "a folder that can be written"
+        return ParameterError(text, parameter="out", value=str(out), allowed=allowed)
 
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -259,12 +248,7 @@ def _replayed(entry: Any, out: Path, start: float) -> Report | None:
 
 
 def _build(out: Path, *, quick: bool, animations: bool, start: float) -> tuple[Report, list[Path]]:
-    """Compute everything and write the report.
-
-    Returns:
-        The :class:`Report` and the files written into ``out`` but ``verdicts.json``.
-
-    """
+    """Compute and write the report: the :class:`Report` and the files but ``verdicts.json``."""
     from . import figures
     from ._worker import NumericHalf
     from .checks import Context, evaluate
@@ -411,11 +395,8 @@ def _facts(key: str, rep: Report) -> list[Block]:
 
 
 def _md_table(header: list[str], rows: list[list[str]]) -> list[str]:
-    def cell(x: str) -> str:
-        return str(x).replace("|", "/")
-
     out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    return out + ["| " + " | ".join(cell(x) for x in r) + " |" for r in rows]
+    return out + ["| " + " | ".join(str(x).replace("|", "/") for x in r) + " |" for r in rows]
 
 
 def _md_derivation(title: str, printed: dict[str, Any]) -> list[str]:
@@ -449,15 +430,6 @@ def _md_cells(cells: str) -> list[str]:
         header = data.get("header") or [f"col {j + 1}" for j in range(len(rows[0]) if rows else 0)]
         out += ["", f"{name} (differing entries in bold):", ""] + _md_table(header, body)
     return out
-
-
-def _passage_md(v: Verdict, seeds: dict[str, str]) -> str:
-    """Where a claim's passage is in the shipped seed text (a link from the report folder)."""
-    if not v.lines or v.seed not in seeds:
-        return ""
-    name = seed_file(seeds[v.seed]).name
-    first, span = _span(v.lines)
-    return f"[{name}, {span}](seeds/{name}#L{first})"
 
 
 def _span(lines: str) -> tuple[str, str]:
@@ -494,13 +466,12 @@ def _markdown(
         lines += ["", f"## {title}", ""]
         if intro:
             lines += [intro, ""]
-        for v in rep.verdicts:
-            if _section(v) != key:
-                continue
+        for v in [v for v in rep.verdicts if _section(v) == key]:
             lines += [f"### {v.claim} — seed {v.seed}, {v.where}", ""]
-            passage = _passage_md(v, seeds)
-            if passage:
-                lines += [f"- passage: {passage}"]
+            if v.lines and v.seed in seeds:  # a link to the shipped seed text
+                name = seed_file(seeds[v.seed]).name
+                first, span = _span(v.lines)
+                lines += [f"- passage: [{name}, {span}](seeds/{name}#L{first})"]
             if v.cells:
                 lines += _md_cells(v.cells) + [""]
             else:
@@ -574,9 +545,7 @@ def _html(
         h.append(f"<h2>{e(title)}</h2>")
         if intro:
             h.append(f"<p>{H.inline(intro)}</p>")
-        for v in rep.verdicts:
-            if _section(v) != key:
-                continue
+        for v in [v for v in rep.verdicts if _section(v) == key]:
             h.append(
                 f"<div class='item' id='{e(v.claim)}'><h3>{e(v.claim)} — seed {e(v.seed)}, "
                 f"{e(H.seed_notation(v.where))}{passage(v)}</h3>"

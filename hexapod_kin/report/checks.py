@@ -55,13 +55,8 @@ _ITEMS: dict[str, Callable[[Any], Any]] = {
 class Context(Experiments):
     """hexapod_kin's side of every comparison, computed on first use and kept.
 
-    The models and the experiments are :class:`~.experiments.Experiments`'; the derivations
-    and the replayed schedule are added here.
-
-    Args:
-        quick: Smaller runs (shorter step and pendulum, coarser schedule sampling).
-        claims: All claims (a matrix check looks up the seed's own factors).
-
+    The derivations and the replayed schedule beside :class:`~.experiments.Experiments`'
+    models and experiments (``quick``: smaller runs); ``claims``: all claims, by id.
     """
 
     def __init__(self, quick: bool = False, claims: list[Claim] | None = None) -> None:
@@ -70,7 +65,6 @@ class Context(Experiments):
         self._derived: dict[str, Any] = {}
         self._items: dict[tuple[str, str], sp.Matrix] = {}
 
-    # ------------------------------------------------------------------ models
     def derivation(self, key: str) -> Any:
         """:func:`hexapod_kin.symbolic.derive` of the model, kept (no budget: small tables)."""
         from ..symbolic import derive
@@ -106,7 +100,6 @@ class Context(Experiments):
             raise KeyError(f"unknown item {item!r}")
         return sp.Matrix(plain(sp.Matrix(out)))
 
-    # ------------------------------------------------------------------ experiments
     @cached_property
     def schedule(self) -> dict[str, np.ndarray]:
         """Seed 002 Table I replayed: q(t), FK, the seed's IK and :func:`ik.analytic`."""
@@ -122,11 +115,9 @@ class Context(Experiments):
         ours = np.array([s[np.argmin(np.abs(s - qi).sum(axis=1))] for s, qi in zip(sols, q)])
         back = np.array([mdl.position(qi) for qi in ours])
         claim = self.claims.get("002-table1")
-        seed = (
-            _seed_ik(claim.data["value"], feet, self.lengths("coxa"))
-            if claim is not None
-            else np.full_like(q, np.nan)
-        )
+        seed = np.full_like(q, np.nan)
+        if claim is not None:
+            seed = _seed_ik(claim.data["value"], feet, self.lengths("coxa"))
         knots = {"knots_t": sched.times, "knots_q": sched.values}
         return dict(t=t, q=q, feet=feet, ours=ours, back=back, seed=seed, **knots)
 
@@ -167,11 +158,7 @@ class Context(Experiments):
 def _seed_ik(
     formulas: dict[str, str], feet: np.ndarray, lengths: dict[sp.Symbol, float]
 ) -> np.ndarray:
-    """The seed's IK formulas (assignments in order) evaluated at every foot: (N, 2) θ1, θ2.
-
-    Each formula is parsed once and evaluated with numpy over all feet at once (symbols
-    matched by name: the lengths, ``x, y, z`` and the names assigned before it).
-    """
+    """The seed's IK formulas (assignments in order, symbols by name) at every foot: (N, 2)."""
     env: dict[str, Any] = {k.name: float(v) for k, v in lengths.items()}
     env.update(x=feet[:, 0], y=feet[:, 1], z=feet[:, 2])
     for name, text in formulas.items():
@@ -196,9 +183,8 @@ def _verdict(
     first, last = c.lines
     lines = f"{first}-{last}" if first else ""
     layout = json.dumps(cells, ensure_ascii=False) if cells else ""
-    return Verdict(
-        c.id, c.seed, c.where, c.kind, claimed, computed, status, reason, method, layout, lines
-    )
+    head = (c.id, c.seed, c.where, c.kind, claimed, computed)
+    return Verdict(*head, status, reason, method, layout, lines)
 
 
 def _judged(
@@ -214,11 +200,8 @@ _AT = re.compile(r"^\((\d+),(\d+)\):")
 
 def _cells(seed_rows: Any, ours: sp.Matrix, diffs: list[str], note: str = "") -> dict[str, Any]:
     """The matrix layout of a verdict: the seed's entries as written, ours, the differing ones."""
-    differ = []
-    for d in diffs:
-        m = _AT.match(d)
-        if m:
-            differ.append([int(m.group(1)) - 1, int(m.group(2)) - 1])
+    found = [_AT.match(d) for d in diffs]
+    differ = [[int(m.group(1)) - 1, int(m.group(2)) - 1] for m in found if m]
     rows = [[str(v) for v in row] for row in seed_rows]
     mine = [[fmt(tidy(ours[i, j])) for j in range(ours.cols)] for i in range(ours.rows)]
     return {"seed": rows, "ours": mine, "differ": differ, "note": note}
@@ -246,7 +229,6 @@ def _with(c: Claim) -> str:
     return " with " + ", ".join(f"{k} = {v:g}" for k, v in subs.items()) if subs else ""
 
 
-# ---------------------------------------------------------------------- checks
 def _check_matrix(c: Claim, ctx: Context) -> Verdict:
     """``matrix`` claims (transforms, p, J)."""
     key, item, subs = c.data["model"], c.data["item"], _subs(c)
@@ -271,11 +253,8 @@ def _check_matrix(c: Claim, ctx: Context) -> Verdict:
         p = _at(parse_matrix(ctx.claims[c.data["derivative_of"]].data["value"]), subs)
         dp = p.jacobian(Q[: seed.cols])
         own = matrix_diff(seed, dp, c.id + "d")
-        notes.append(
-            "it is the derivative of the seed's own p"
-            if not own
-            else "nor is it the derivative of the seed's own p: " + "; ".join(own)
-        )
+        nor = "nor is it the derivative of the seed's own p: " + "; ".join(own)
+        notes.append(nor if own else "it is the derivative of the seed's own p")
     return _judged(c, claimed, computed, [" — ".join(n for n in notes if n)], _SYMBOLIC, cells)
 
 
@@ -546,11 +525,7 @@ def _check_schedule(c: Claim, ctx: Context) -> Verdict:
 
 
 def _admissible(c: Claim, ctx: Context, val: float) -> str | None:
-    """Why a failed ``bound`` claim holds for an admissible value of what the seed leaves open.
-
-    Returns the reason (the claim is *underdetermined*), or None: no admissible value is known
-    to make it hold (the seed is *wrong*). Only claims with ``unstated`` are asked.
-    """
+    """Why a failed ``bound`` claim with ``unstated`` holds for an admissible value (else None)."""
     if "unstated" not in c.data:
         return None
     name, tol = c.data["quantity"], float(c.data["tol"])
@@ -580,11 +555,7 @@ def _admissible(c: Claim, ctx: Context, val: float) -> str | None:
 
 
 def _check_bound(c: Claim, ctx: Context) -> Verdict:
-    """``bound``: a measured quantity within ``tol`` of the claimed value.
-
-    Out of ``tol``: *underdetermined* when :func:`_admissible` finds an admissible value of
-    the claim's ``unstated`` for which it holds, else *wrong*.
-    """
+    """``bound``: a measured quantity within ``tol`` (else underdetermined or wrong)."""
     val = ctx.quantity(c.data["quantity"])
     target, tol, unit = float(c.data["value"]), float(c.data["tol"]), c.data.get("unit", "")
     claimed = f"{c.data['quantity']} = {target:g} {unit}"
@@ -614,10 +585,7 @@ CHECKS: dict[str, Callable[[Claim, Context], Verdict]] = {
 
 
 def evaluate(claims: list[Claim], ctx: Context) -> list[Verdict]:
-    """Compute every claim's verdict against ``ctx``.
-
-    A comparison that raises gives status ``"error"`` with the exception (never skipped).
-    """
+    """Every claim's verdict against ``ctx`` (one that raises: status ``"error"``, not skipped)."""
     out = []
     for claim in claims:
         try:

@@ -56,17 +56,11 @@ SYMS: dict[str, sp.Symbol] = {s.name: s for s in Q}
 SYMS.update({n: sp.Symbol(n, real=True) for n in _NAMES})
 
 
-def _locals() -> dict[str, Any]:
-    loc: dict[str, Any] = dict(SYMS)
-    for combo in ("1", "2", "3", "12", "23", "123"):
-        angle = sum(Q[int(k) - 1] for k in combo)
-        loc[f"c{combo}"] = sp.cos(angle)
-        loc[f"s{combo}"] = sp.sin(angle)
-    loc["pi"] = sp.pi
-    return loc
-
-
-_LOCALS = _locals()
+#: ``parse``'s names: the symbols, ``pi`` and the ``c23``/``s23`` abbreviations of the seeds.
+_LOCALS: dict[str, Any] = {**SYMS, "pi": sp.pi}
+for _combo in ("1", "2", "3", "12", "23", "123"):
+    _angle = sum(Q[int(k) - 1] for k in _combo)
+    _LOCALS.update({f"c{_combo}": sp.cos(_angle), f"s{_combo}": sp.sin(_angle)})
 
 
 def parse(text: Any) -> sp.Expr:
@@ -97,17 +91,9 @@ def plain(expr: Any) -> Any:
     return expr.xreplace(rename) if rename else expr
 
 
-# ---------------------------------------------------------------------- comparison helpers
 def _rng(key: str) -> np.random.Generator:
     """A generator seeded by ``key`` (SHA-256: the same points in every process)."""
     return np.random.default_rng(int.from_bytes(hashlib.sha256(key.encode()).digest()[:8], "big"))
-
-
-def _point(symbols: Any, rng: np.random.Generator) -> dict[sp.Symbol, float]:
-    """Angles (``q…``, ``theta``, ``alpha``) uniform in [−π, π], other symbols in [0.5, 2]."""
-    angle = [s.name.startswith("q") or s.name in ("theta", "alpha") for s in symbols]
-    spans = [(-math.pi, math.pi) if a else (0.5, 2.0) for a in angle]
-    return {s: float(rng.uniform(*span)) for s, span in zip(symbols, spans)}
 
 
 def value_at(expr: Any, point: Mapping[sp.Symbol, float]) -> float:
@@ -116,11 +102,9 @@ def value_at(expr: Any, point: Mapping[sp.Symbol, float]) -> float:
 
 
 def _evaluate(exprs: Sequence[Any], env: Mapping[sp.Symbol, np.ndarray]) -> np.ndarray:
-    """Real expressions at points, numpy float64: ``(len(exprs), points)`` (complex dtype).
+    """Real expressions at points: ``(len(exprs), points)``, complex dtype.
 
-    The package's one walk (:func:`~hexapod_kin.symbolic.checks.evaluate_matrix`: each
-    distinct sub-expression once, no code generated); what it cannot evaluate (a function
-    outside :data:`~hexapod_kin.symbolic.checks.NUMPY_FUNCTIONS`, a complex number) by
+    By :func:`~hexapod_kin.symbolic.checks.evaluate_matrix`; what it cannot evaluate by
     ``sympy.lambdify``.
     """
     points = len(next(iter(env.values()))) if env else POINTS
@@ -142,7 +126,9 @@ def screen(a: Sequence[Any], b: Sequence[Any], key: str = "") -> tuple[np.ndarra
     ea, eb = [plain(x) for x in a], [plain(x) for x in b]
     ordered = sorted(set().union(*(e.free_symbols for e in ea + eb)), key=str)
     rng = _rng(key)
-    pts = [_point(ordered, rng) for _ in range(POINTS)]
+    angle = [s.name.startswith("q") or s.name in ("theta", "alpha") for s in ordered]
+    spans = [(-math.pi, math.pi) if a else (0.5, 2.0) for a in angle]
+    pts = [{s: float(rng.uniform(*w)) for s, w in zip(ordered, spans)} for _ in range(POINTS)]
     args = [np.array([p[s] for p in pts]) for s in ordered]
     with np.errstate(all="ignore"):
         vals = _evaluate(ea + eb, dict(zip(ordered, args))).reshape(2, len(ea), POINTS)
@@ -173,9 +159,8 @@ _HOLLOW = Transform(lambda x: sp.Mul(*x.args), _hollow)
 def tidy(expr: Any) -> Any:
     """``expr`` as printed in a verdict: common factors out, the sign in front (exactly equal).
 
-    ``sympy.simplify``'s non-trigonometric steps in its order (``signsimp``, ``factor_terms``,
-    a lone number released from a sum, the sign out of a quotient, the original kept when 1.7
-    times shorter); a power of ``sin``/``cos`` goes to ``simplify`` itself. Print only.
+    ``sympy.simplify``'s non-trigonometric steps (the original kept when 1.7 times shorter);
+    a power of ``sin``/``cos`` goes to ``simplify`` itself. Print only.
     """
     expr = sp.sympify(expr)
     if not expr.args:
@@ -192,11 +177,10 @@ def tidy(expr: Any) -> Any:
 
 
 def _reduces_to_zero(poly: Any) -> bool:
-    """True when ``poly`` is 0 modulo ``sin(x)² + cos(x)² = 1`` for every angle ``x`` in it.
+    """True when the expanded ``poly`` is 0 modulo ``sin(x)² + cos(x)² = 1`` (a proof).
 
-    ``poly``: expanded, ``sin``/``cos`` of plain symbols. Its remainder by ``s² + c² − 1`` in
-    ``s = sin x``, angle by angle, is 0 only for a combination of those relations (a proof; a
-    non-zero remainder proves nothing). Anything else gives False.
+    Its remainder by ``s² + c² − 1`` in ``s = sin x``, angle by angle; a non-zero one proves
+    nothing (False), as does anything but ``sin``/``cos`` of plain symbols.
     """
     trig = poly.atoms(sp.sin, sp.cos)
     if not trig or any(not f.args[0].is_Symbol for f in trig):
@@ -220,30 +204,19 @@ def _reduces_to_zero(poly: Any) -> bool:
 
 @lru_cache(maxsize=4096)
 def _zero(diff: Any) -> bool:
-    """True when ``diff`` is exactly 0.
-
-    ``expand(expand_trig(diff)) == 0``, else that reduced modulo ``sin² + cos² = 1`` is 0
-    (:func:`_reduces_to_zero`), else ``simplify(...) == 0``.
-    """
+    """True when ``diff`` is exactly 0: expanded, then :func:`_reduces_to_zero`, then simplify."""
     d = sp.expand(sp.expand_trig(diff))
     return bool(d == 0 or _reduces_to_zero(d) or simplified(d) == 0)
 
 
 def equal(a: Any, b: Any, key: str = "") -> bool:
-    """True when ``a == b`` at :data:`POINTS` random points and ``simplify(a − b) == 0``.
-
-    The symbolic proof runs only when the numeric screening (:func:`screen`) passes.
-    """
+    """True when ``a == b`` at :data:`POINTS` random points (:func:`screen`), then exactly."""
     a, b = plain(a), plain(b)
     return bool(screen([a], [b], key)[0][0]) and _zero(a - b)
 
 
 def factored(det: Any, q: Sequence[Any], sigmas: Sequence[str], key: str = "") -> Any:
-    """``det`` factored as :func:`~hexapod_kin.symbolic.derive` factors det J (checked equal).
-
-    ``trig_factor`` over the joints ``q`` of kinds ``sigmas`` then ``factor``; else
-    ``factor(simplify(det))``.
-    """
+    """``det`` factored as :func:`~hexapod_kin.symbolic.derive` does (else factor(simplify))."""
     from ..symbolic.core import trig_factor
 
     qs = tuple(plain(s) for s in q)
@@ -269,10 +242,7 @@ def fmt_matrix(m: sp.Matrix) -> str:
 
 
 def matrix_diff(seed: sp.Matrix, truth: sp.Matrix, key: str, explain: bool = True) -> list[str]:
-    """Differing entries of two same-shape matrices, 1-based, with a sign-slip note.
-
-    ``explain=False``: one empty string per differing entry (only the count is wanted).
-    """
+    """Differing entries, 1-based, with a sign-slip note (``explain=False``: empty strings)."""
     a, b = [plain(x) for x in seed], [plain(x) for x in truth]
     same, opposite = screen(a, b, key)
     out = []
@@ -293,7 +263,6 @@ def parse_matrix(rows: Any) -> sp.Matrix:
     return sp.Matrix([[parse(v) for v in row] for row in rows])
 
 
-# ---------------------------------------------------------------------- family sampling
 def values(expr: Any, qs: np.ndarray) -> np.ndarray:
     """A real expression of ``q1 … q4`` at each row of ``qs`` (an imaginary value is NaN)."""
     expr = plain(expr)
@@ -307,10 +276,9 @@ def values(expr: Any, qs: np.ndarray) -> np.ndarray:
 def points_on(
     expr: Any, nq: int, key: str, count: int = 5, fixed: Mapping[int, float] | None = None
 ) -> np.ndarray:
-    """Up to ``count`` joint vectors (nq,) on the zero set of ``expr`` (numbers for lengths).
+    """Up to ``count`` joint vectors (nq,) on the zero set of ``expr`` (``fixed``: 0-based pins).
 
-    Random joints, the last one ``expr`` depends on a random root in [−π, π]; ``fixed`` pins
-    joints (0-based).
+    Random joints; the last one ``expr`` depends on, a random root in [−π, π].
     """
     from ..symbolic.core import single_joint_roots
 

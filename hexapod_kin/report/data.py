@@ -60,9 +60,7 @@ class Claim:
     def lines(self) -> tuple[int, int]:
         """First and last line (1-based) of the claim's passage in the shipped seed text."""
         raw = [int(x) for x in self.data.get("lines", [])]
-        if not raw:
-            return (0, 0)
-        return (raw[0], raw[-1])
+        return (raw[0], raw[-1]) if raw else (0, 0)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: the claim's TOML table."""
@@ -71,21 +69,14 @@ class Claim:
 
 @dataclass(frozen=True)
 class Verdict:
-    """A computed verdict.
+    """A computed verdict: the claim's id, seed (``"000"`` … ``"003"``), place and kind.
 
     Attributes:
-        claim: The claim's id.
-        seed: The seed (``"000"`` … ``"003"``).
-        where: Location in the seed (section / equation / table / figure).
-        kind: The claim's kind.
-        claimed: The seed's value, as text.
-        computed: hexapod_kin's value, as text.
-        status: One of :data:`STATUSES`.
-        reason: The computed reason (empty when it agrees).
+        claimed: The seed's value, as text; ``computed``: hexapod_kin's.
+        status: One of :data:`STATUSES`; ``reason``: why (empty when it agrees).
         method: How it was compared, with the tolerance.
         cells: For a matrix or table: JSON text ``{"seed": rows, "ours": rows, "differ":
-            [[i, j], ...] (0-based), "header": [...] or absent, "note": text}`` (entries as
-            text), so the report lays it out as a matrix; ``""`` otherwise.
+            [[i, j], ...] (0-based), "header": [...] or absent, "note": text}``; else ``""``.
         lines: The claim's passage in the shipped seed text, ``"first-last"`` (1-based), or
             ``""``.
 
@@ -130,10 +121,7 @@ class Verdict:
         return cls(**{n: data[n] for n in names})
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready: the fields, ``verdict`` = :attr:`text` (no ``reason``), ``cells`` parsed.
-
-        ``cells`` is None for a verdict that is not a matrix or table.
-        """
+        """JSON-ready: the fields, ``verdict`` = :attr:`text` (no ``reason``), ``cells`` parsed."""
         out: dict[str, Any] = self.fields()
         del out["reason"], out["method"], out["cells"]
         cells = json.loads(self.cells) if self.cells else None

@@ -22,12 +22,7 @@ MODELS: dict[str, tuple[str, dict[str, float]]] = {
 
 
 class Experiments:
-    """The claims' models and the seeds' experiments, computed on first use and kept.
-
-    Args:
-        quick: Smaller runs (shorter step and pendulum).
-
-    """
+    """The claims' models and the seeds' experiments, computed once (``quick``: shorter runs)."""
 
     def __init__(self, quick: bool = False) -> None:
         self.quick = quick

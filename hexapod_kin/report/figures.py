@@ -34,12 +34,7 @@ def heat_maps(ctx: Any, out: Path, grid: int) -> tuple[list[Path], dict[str, Any
 
 
 def step_still(ctx: Any, out: Path) -> tuple[Path, str]:
-    """The step animation's scene at mid-motion (foot farthest along x), drawn by matplotlib.
-
-    Returns:
-        The PNG's path and what it shows (``"t = … s"``).
-
-    """
+    """The step animation's scene with the foot farthest along x: the PNG and ``"t = … s, …"``."""
     from ..plots import plot_still
 
     tr = ctx.step.trajectory
@@ -89,10 +84,7 @@ def leg2_figure(ctx: Any, out: Path) -> Path:
 
 
 def plot_pendulum(experiment: Any, path: Any) -> Path:
-    """Seed 001 Figs. 5-8: angle [rad] and angular velocity [rad/s] vs time, undamped and damped.
-
-    ``experiment``: :func:`hexapod_kin.dynamics.pendulum_experiment`'s result.
-    """
+    """Seed 001 Figs. 5-8: θ [rad] and ω [rad/s] vs time of a ``pendulum_experiment``'s runs."""
     from ..plots import decimate, pyplot, save_figure
 
     plt = pyplot()
@@ -122,10 +114,7 @@ def plot_pendulum(experiment: Any, path: Any) -> Path:
 
 
 def _walk_png(run: Any, path: Path) -> Path:
-    """Gait diagram, margin and foot paths (the panels of :mod:`hexapod_kin.gait.plots`).
-
-    The foot paths' limits are fitted to the data and their legend sits beside the panel.
-    """
+    """Gait diagram, margin and foot paths (:mod:`hexapod_kin.gait.plots`'s panels), fitted."""
     from ..gait.plots import draw_foot_paths, draw_gait_diagram, draw_margin
     from ..plots import fit_limits, pyplot, save_figure
 
@@ -179,15 +168,10 @@ def _walk_still(run: Any, out: Path) -> tuple[Path, str]:
 def walk_figures(
     out: Path, duration: float, animation: bool = True, html_dir: Path | None = None
 ) -> tuple[list[Path], dict[str, Any], tuple[Path, str] | None]:
-    """The hexapod standing and walking: gait figure, walk animation and its still frame.
+    """The hexapod standing and walking: figure and animation paths, facts, still frame.
 
-    The figures go into ``out``, the animation ``walk.html`` into ``html_dir`` (default
-    ``out``): written where it stays, so that an interrupted build leaves no stray copy.
-
-    Returns:
-        The figure and animation paths, the facts, and the still frame (path, what it shows)
-        when the animation is asked for.
-
+    The figures go into ``out``, ``walk.html`` into ``html_dir`` (default ``out``): written
+    where it stays. The still frame (path, what it shows) is None without ``animation``.
     """
     from ..dynamics import stand
     from ..gait import walk

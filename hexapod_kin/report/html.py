@@ -58,10 +58,7 @@ def _sub(n: int) -> str:
 
 
 def seed_notation(text: str) -> str:
-    """Transform names written in ASCII (``^0_1T``, ``T_0^1``) as the seeds print them.
-
-    ``^0_1T`` → ``⁰₁T``, ``T_0^1`` → ``T₀¹``; other text unchanged (and not escaped).
-    """
+    """ASCII transform names as the seeds print them: ``^0_1T`` → ``⁰₁T``, ``T_0^1`` → ``T₀¹``."""
     text = re.sub(r"\^(\d)_(\d)T", lambda m: _sup(int(m[1])) + _sub(int(m[2])) + "T", text)
     return re.sub(r"T_(\d)\^(\d)", lambda m: "T" + _sub(int(m[1])) + _sup(int(m[2])), text)
 
@@ -85,12 +82,7 @@ def _table(rows: Sequence[Sequence[str]], differ: set[tuple[int, int]], header: 
 
 
 def matrix_pair(cells: str | dict[str, Any]) -> str:
-    """The seed's and hexapod_kin's matrix (or table) side by side, differing entries marked.
-
-    Args:
-        cells: :attr:`~.data.Verdict.cells` (JSON text or its data).
-
-    """
+    """The seed's and our matrix of ``cells`` (:attr:`~.data.Verdict.cells`) side by side."""
     data = json.loads(cells) if isinstance(cells, str) else cells
     differ = {(int(i), int(j)) for i, j in data.get("differ", [])}
     header = data.get("header")
@@ -138,13 +130,7 @@ def verdict_html(text: str, status: str) -> str:
 
 
 def derivation_layout(d: Any) -> dict[str, Any]:
-    """A derivation laid out for the report: matrices as rows of entry texts (no pretty-printing).
-
-    Returns:
-        ``{"header": [lines], "items": [{"label", "rows"} or {"label", "value"}],
-        "footer": [lines]}``; entries are :func:`~.compare.fmt` text of the expressions.
-
-    """
+    """A derivation as ``{"header", "items": [{"label", "rows" or "value"}], "footer"}``."""
     import sympy as sp
 
     from .compare import fmt  # the comparison's text of an expression (not needed by derive)
@@ -167,11 +153,8 @@ def derivation_layout(d: Any) -> dict[str, Any]:
     if d.tool_transform != sp.eye(4):
         mats.append((f"{_sup(n)}T(tool)", d.tool_transform))
     mats += [(f"⁰T{_sub(j + 1)}", d.cumulative[j]) for j in range(1, n)]
-    mats += [
-        ("p(q)", d.p),
-        ("J (indirect, ∂p/∂q)", d.J_indirect),
-        ("J (direct, [v; ω])", d.J_direct),
-    ]
+    mats += [("p(q)", d.p), ("J (indirect, ∂p/∂q)", d.J_indirect)]
+    mats.append(("J (direct, [v; ω])", d.J_direct))
     items: list[dict[str, Any]] = [
         {"label": label, "rows": [[fmt(x) for x in m.row(i)] for i in range(m.rows)]}
         for label, m in mats
@@ -185,11 +168,8 @@ def derivation_layout(d: Any) -> dict[str, Any]:
         footer.append(f"determinant: {d.method}")
     for fam in d.families:
         mark = {True: "checked", False: "CHECK FAILED", None: "not checked"}[fam.verified]
-        footer.append(
-            f"singular family: {fam.name} [{mark}: {fam.check}]"
-            if fam.check
-            else f"singular family: {fam.name}"
-        )
+        note = f" [{mark}: {fam.check}]" if fam.check else ""
+        footer.append(f"singular family: {fam.name}{note}")
     footer += [f"NOT DONE: {what}" for what in d.incomplete]
     return {"header": header, "items": items, "footer": footer}
 
@@ -219,10 +199,7 @@ def image(path: Path, alt: str | None = None, cls: str = "") -> str:
 
 
 def animation(page: Path, still: Path | None, when: str) -> str:
-    """The animation ``page`` (inert in a ``<template>`` until its button) over its ``still``.
-
-    ``when`` says what the still frame shows; without WebGL :data:`SCRIPT` shows a message.
-    """
+    """The animation ``page`` (inert until its button) over its ``still`` (showing ``when``)."""
     link = f"<a href='{e(page.name)}'>{e(page.name)}</a>"
     msg = (
         f"This browser has no WebGL: showing a still frame ({e(when)}) instead of the "

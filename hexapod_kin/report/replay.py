@@ -84,8 +84,8 @@ def versions() -> dict[str, str]:
 
     from .. import __version__
 
-    out = {"python": f"{platform.python_implementation()} {platform.python_version()}"}
-    out["hexapod_kin"] = __version__
+    python = f"{platform.python_implementation()} {platform.python_version()}"
+    out = {"python": python, "hexapod_kin": __version__}
     for name in DISTRIBUTIONS:
         try:
             out[name] = version(name)
@@ -95,9 +95,7 @@ def versions() -> dict[str, str]:
 
 
 def key_parts(*, quick: bool, animations: bool, digest: str) -> dict[str, Any]:
-    """Everything a report of these options depends on, JSON-ready.
-
-    ``digest``: the package source's (:func:`source_digest`, read when the build starts).
+    """Everything a report of these options depends on, JSON-ready (``digest``: the source's).
 
     Raises:
         OSError: The package's source or ``claims.toml`` cannot be read.
@@ -121,15 +119,10 @@ def run_key(parts: Mapping[str, Any]) -> str:
 
 @dataclass(frozen=True)
 class Entry:
-    """A complete, verified run entry.
+    """A complete, verified run entry: key, folder, manifest and files (POSIX path → bytes).
 
-    Attributes:
-        key: The run's key.
-        folder: The entry's folder.
-        record: The manifest (``built``: UTC time of the build, ``seconds``: its wall time in
-            [s], ``verdicts``, ``facts``, ``files``, ``parts``, ...).
-        files: Relative path (POSIX) → content, every one checked against the manifest.
-
+    The manifest (``record``) holds ``built`` (UTC time of the build), ``seconds`` (its wall
+    time [s]), ``verdicts``, ``facts``, ``files``, ``parts``...
     """
 
     key: str
@@ -152,10 +145,7 @@ def _safe(rel: Any) -> bool:
 
 
 def seal(record: Mapping[str, Any]) -> str | None:
-    """The keyed seal (:func:`hexapod_kin._cache.seal`) of a manifest without its ``"seal"``.
-
-    ``None`` when there is no per-user secret (nothing is cached then).
-    """
+    """The keyed seal (:func:`hexapod_kin._cache.seal`) of a manifest (None: no secret)."""
     body = {k: v for k, v in record.items() if k != "seal"}
     body = json.loads(json.dumps(body, default=str))
     return _disk.seal("replay", str(record.get("key")), body)
@@ -168,7 +158,7 @@ class _Damaged(ValueError):
 def lookup(key: str) -> Entry | None:
     """The complete entry of ``key`` with every file matching its manifest, else ``None``.
 
-    Never raises; a damaged, edited or foreign entry also warns once (``CacheWarning``).
+    Never raises; a damaged, edited or foreign entry warns once (``CacheWarning``).
     """
     folder = runs_dir() / key
     try:
@@ -191,13 +181,7 @@ def _warn(key: str, exc: BaseException) -> None:
 
 
 def _checked(key: str, folder: Path, text: str) -> Entry:
-    """The entry of ``key`` read from its manifest ``text``, every check passed.
-
-    Raises:
-        _Damaged: The entry is not the sealed, complete entry of ``key`` (or another error
-            of reading it).
-
-    """
+    """The entry of ``key`` read from its manifest ``text``, every check passed (else _Damaged)."""
     record = json.loads(text)
     if not isinstance(record, dict) or record.get("format") != FORMAT:
         raise _Damaged("not a manifest of this format")
@@ -265,12 +249,7 @@ def verdicts_match(verdicts: list[dict[str, Any]], files: Mapping[str, bytes]) -
 
 
 def restore(entry: Entry, out: Path) -> list[Path]:
-    """Write the entry's files into ``out`` (atomically, folders created); mark it used.
-
-    Raises:
-        ParameterError: A file of ``out`` cannot be written.
-
-    """
+    """Write the entry's files into ``out`` (atomically; ParameterError); mark it used."""
     written = []
     for rel, data in entry.files.items():
         dest = out.joinpath(*PurePosixPath(rel).parts)
@@ -292,8 +271,7 @@ def save(
     """Keep a successful build's ``files`` (written into ``out``) under ``runs/<key>/``.
 
     ``record``: the build's verdicts (:meth:`~.data.Verdict.fields`), facts, summary, counts
-    and seconds. Returns the entry's folder, or ``None`` (never raises; an ``"error"`` verdict
-    is not kept); then keeps ``keep`` entries (:func:`prune`).
+    and seconds. Returns the entry's folder, or ``None`` (never raises); prunes to ``keep``.
     """
     folder = runs_dir() / key
     try:
@@ -330,9 +308,9 @@ def save(
 
 
 def prune(keep: int = KEEP) -> list[Path]:
-    """Remove all but the ``keep`` most recently used entries; return the removed folders.
+    """Remove all but the ``keep`` most recently used entries (never raises); return them.
 
-    An entry without a manifest is removed after an hour (it may be being stored). Never raises.
+    An entry without a manifest is removed after an hour (it may be being stored).
     """
     removed: list[Path] = []
     try:

@@ -8,6 +8,7 @@ module that starts it.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import signal
@@ -113,10 +114,8 @@ def serve() -> None:  # pragma: no cover - runs in the server subprocess
                     frames[1].decode("utf-8")
                 super().handle_zmq(frames)
             except Exception as exc:  # noqa: BLE001 - any bad message: reply, drop, go on
-                try:
+                with contextlib.suppress(zmq.ZMQError):
                     self.zmq_socket.send(f"error: {type(exc).__name__}".encode())
-                except zmq.ZMQError:
-                    pass
 
         def __init__(self) -> None:  # noqa: D401 - not super().__init__: it binds 0.0.0.0
             self.host = LOOPBACK
@@ -143,11 +142,9 @@ def serve() -> None:  # pragma: no cover - runs in the server subprocess
     signal.signal(signal.SIGINT, stop)
 
     def watch_parent() -> None:
-        try:
+        with contextlib.suppress(OSError, ValueError):
             while sys.stdin.buffer.read(4096):
                 pass
-        except (OSError, ValueError):
-            pass
         loop.add_callback(loop.stop)
 
     threading.Thread(target=watch_parent, daemon=True).start()

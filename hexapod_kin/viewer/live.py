@@ -43,7 +43,8 @@ class Viewer:
         start_timeout: Seconds to wait for the server to start.
 
     Raises:
-        ViewerError: The server did not start or does not answer.
+        ViewerError: The server did not start or does not answer (every method that draws
+            raises it too when the server is gone or silent past ``timeout``).
         OptionalDependencyError: meshcat is not installed.
 
     """
@@ -74,7 +75,6 @@ class Viewer:
             self.close()
             raise
 
-    # -------------------------------------------------------------- properties
     @property
     def url(self) -> str:
         """The page to open in a browser (``http://127.0.0.1:PORT/static/``)."""
@@ -95,14 +95,8 @@ class Viewer:
         """The server process handle."""
         return self._server
 
-    # -------------------------------------------------------------- drawing
     def send(self, cmd: dict[str, Any]) -> None:
-        """Send one raw meshcat command (a dict as in :func:`scene_commands`).
-
-        Raises:
-            ViewerError: The server is gone or did not answer within the timeout.
-
-        """
+        """Send one raw meshcat command (a dict as in :func:`scene_commands`)."""
         if self._client is None:
             raise ViewerError("the viewer is closed; open a new Viewer")
         self._client.send(cmd)
@@ -120,22 +114,18 @@ class Viewer:
             self._animated = True
 
     def display(self, q: Any, base_pose: Any = None) -> None:
-        """Show the model at configuration ``q`` (nq,) (and root pose ``base_pose`` (4, 4)).
-
-        A running animation is stopped; the frame triads, if shown, follow the pose.
+        """Show the model at ``q`` (nq,) and root pose ``base_pose`` (4, 4); stops an animation.
 
         Raises:
             ConfigurationError: Bad ``q`` or ``base_pose``.
-            ViewerError: The server is gone or did not answer within the timeout.
 
         """
         qv = self.model.check_q(q)
         base = check_base_poses(base_pose, 1)
         poses = self._scene.placements(qv[None, :], base)
         if self._animated:  # an empty animation clears meshcat's player
-            self.send(
-                {"type": "set_animation", "path": "", "animations": [], "options": {"play": False}}
-            )
+            off = {"play": False}
+            self.send({"type": "set_animation", "path": "", "animations": [], "options": off})
             self._animated = False
         for j, vis in enumerate(self._scene.visuals):
             self.send(set_transform(vis.path, poses[0, j]))
@@ -153,24 +143,16 @@ class Viewer:
 
         Raises:
             ConfigurationError: Bad shapes or values.
-            ViewerError: The server is gone or did not answer within the timeout.
 
         """
         self._show(times, qs, animate=True, **options)
 
     def set_visible(self, part: str, visible: bool) -> None:
-        """Show or hide a part of the scene (one of :data:`PARTS`).
-
-        Raises:
-            ParameterError: Unknown part.
-            ViewerError: The server is gone or did not answer within the timeout.
-
-        """
+        """Show or hide a part of the scene (one of :data:`PARTS`; else ParameterError)."""
         if part not in PARTS:
             raise ParameterError(f"part={part!r} is not allowed; use one of {choices(PARTS)}")
         self.send(set_property(f"/meshcat/{part}", "visible", bool(visible)))
 
-    # -------------------------------------------------------------- lifetime
     def close(self) -> None:
         """Disconnect and stop the server (idempotent)."""
         client, self._client = self._client, None

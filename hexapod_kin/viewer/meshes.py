@@ -29,16 +29,7 @@ QUANT_MAX = 32767
 
 @dataclass(frozen=True)
 class MeshGeometry:
-    """A mesh as a three.js BufferGeometry and the matrix that dequantises it.
-
-    Attributes:
-        data: The geometry (``BufferGeometry``: int16 positions, uint16/uint32 index,
-            float32 normals if asked for).
-        matrix: 4×4 from quantised to mesh coordinates [m] (translation then uniform scale).
-        vertices: Number of vertices.
-        triangles: Number of triangles.
-
-    """
+    """A mesh as a BufferGeometry, its counts and ``matrix``: quantised → mesh coordinates [m]."""
 
     data: dict[str, Any]
     matrix: np.ndarray
@@ -59,11 +50,8 @@ def _mesh_arrays(geometry: Any) -> tuple[np.ndarray, np.ndarray] | None:
         tris = np.array(corners, dtype=np.int64).reshape(-1, 3)
     except (AttributeError, RuntimeError, TypeError, ValueError):
         return None
-    if not len(verts) or not len(tris) or not np.all(np.isfinite(verts)):
-        return None
-    if tris.min() < 0 or tris.max() >= len(verts):
-        return None
-    return verts, tris
+    empty = not len(verts) or not len(tris) or not np.all(np.isfinite(verts))
+    return None if empty or tris.min() < 0 or tris.max() >= len(verts) else (verts, tris)
 
 
 def _quantise(verts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -87,13 +75,7 @@ def _vertex_normals(verts: np.ndarray, tris: np.ndarray) -> np.ndarray:
 
 
 def mesh_geometry(geometry: Any, *, normals: bool) -> MeshGeometry | None:
-    """The compact geometry of a loaded mesh, or None if it has no triangles.
-
-    Args:
-        geometry: A Pinocchio/Coal BVH (``GeometryObject.geometry`` of a mesh).
-        normals: Include float32 vertex normals (for pages that do not compute them).
-
-    """
+    """The compact geometry of a Pinocchio/Coal BVH (with float32 ``normals``), or None: empty."""
     arrays = _mesh_arrays(geometry)
     if arrays is None:
         return None
@@ -109,15 +91,11 @@ def mesh_geometry(geometry: Any, *, normals: bool) -> MeshGeometry | None:
 
 
 def add_sticks(model: Any, geom: Any) -> int:
-    """Add a stick figure to ``geom`` for the joints of ``model`` that carry no geometry.
+    """Add sticks to the visual ``geom`` of the Pinocchio ``model`` where joints carry none.
 
-    For each such joint (the base included), one cylinder from the joint's origin to each
-    child joint's origin and to each link frame (body or fixed-joint frame) attached to it
-    and not at its origin; a last link with neither, to its centre of mass. ``geom`` is
-    changed in place (a fresh ``GeometryModel``).
-
-    ``model`` is the Pinocchio model, ``geom`` its visual ``pinocchio.GeometryModel``; returns
-    the number of sticks added.
+    Per such joint (the base included), a cylinder from its origin to each child joint's
+    origin and each body or fixed-joint frame on it, else to its centre of mass; in place.
+    Returns the number of sticks added.
     """
     import coal
     import pinocchio as pin

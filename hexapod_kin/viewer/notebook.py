@@ -25,13 +25,7 @@ __all__ = ["NotebookView", "show", "show_walk"]
 
 @dataclass(frozen=True)
 class NotebookView:
-    """A self-contained viewer page, displayed inline by Jupyter.
-
-    Attributes:
-        page: The whole HTML page (opens by itself from disk).
-        height: Frame height in [px].
-
-    """
+    """A self-contained viewer ``page`` (the whole HTML), shown inline by Jupyter ``height`` px."""
 
     page: str
     height: int = 480
@@ -79,10 +73,7 @@ def show(
 
 
 def show_walk(run: Any, *, model: Any = None, height: int = 480, **options: Any) -> NotebookView:
-    """A walk (a :class:`~hexapod_kin.gait.walk.GaitRun`) animated inline in a notebook.
-
-    The support polygon and the projected centre of mass are drawn per frame, as in
-    :func:`hexapod_kin.viewer.walk_html`.
+    """A walk (a :class:`~hexapod_kin.gait.walk.GaitRun`) animated inline, as ``walk_html``.
 
     Args:
         run: The walk.

@@ -24,15 +24,13 @@ _NS = uuid.UUID("6f1d3c9a-2b1e-4f55-9a59-0c8c2f7d1e42")
 TRACE_COLORS = (0x1F77B4, 0xD62728, 0x2CA02C, 0x9467BD, 0x8C564B, 0xE377C2, 0x17BECF)
 
 
-# ====================================================================== optional dependencies
 def msgpack_lib() -> Any:
     """The u-msgpack-python module (an optional dependency)."""
     try:
         import umsgpack
     except ImportError:
-        raise OptionalDependencyError(
-            f"the viewer needs u-msgpack-python; {INSTALL_HINT}"
-        ) from None
+        msg = f"the viewer needs u-msgpack-python; {INSTALL_HINT}"
+        raise OptionalDependencyError(msg) from None
     return umsgpack
 
 
@@ -49,14 +47,7 @@ def bundle() -> str:
     path = meshcat_dir() / "viewer" / "dist" / "main.min.js"
     if not path.is_file():
         raise OptionalDependencyError(f"meshcat's viewer bundle {path} is missing; {INSTALL_HINT}")
-    text = path.read_text(encoding="utf-8")
-    return text.replace("</script", "<\\/script")
-
-
-# ====================================================================== low-level: JSON objects
-def _uuid(*parts: object) -> str:
-    """Deterministic UUID (meshcat's own ``uuid1`` would embed the host's MAC address)."""
-    return str(uuid.uuid5(_NS, "/".join(str(p) for p in parts)))
+    return path.read_text(encoding="utf-8").replace("</script", "<\\/script")
 
 
 def f32(array: Any) -> Any:
@@ -75,10 +66,7 @@ TYPED_ARRAYS = {
 
 
 def attribute(array: np.ndarray, item_size: int) -> dict[str, Any]:
-    """A three.js BufferGeometry attribute of ``array`` (int16, uint16, uint32 or float32).
-
-    Other integer arrays are sent as uint32, other floats as float32.
-    """
+    """A three.js BufferGeometry attribute of ``array`` (other ints as uint32, floats float32)."""
     kind = array.dtype.name
     if kind not in TYPED_ARRAYS:
         kind = "uint32" if array.dtype.kind == "u" else "float32"
@@ -97,12 +85,6 @@ def trace_rgba(k: int) -> list[float]:
     """The RGBA in [0, 1] of trace colour ``k`` (cycling through :data:`TRACE_COLORS`)."""
     col = TRACE_COLORS[k % len(TRACE_COLORS)]
     return [((col >> 16) & 255) / 255, ((col >> 8) & 255) / 255, (col & 255) / 255, 1.0]
-
-
-def _hex_color(rgb: Sequence[float]) -> int:
-    """The 0xRRGGBB integer of an RGB(A) colour in [0, 1]."""
-    r, g, b = (int(round(255 * min(max(float(c), 0.0), 1.0))) for c in rgb[:3])
-    return (r << 16) | (g << 8) | b
 
 
 def rotation(axis: str, angle: float) -> np.ndarray:
@@ -132,8 +114,9 @@ class ObjectJSON:
         self._n = 0
 
     def _id(self, role: str) -> str:
+        """A deterministic UUID (meshcat's ``uuid1`` would embed the host's MAC address)."""
         self._n += 1
-        return _uuid(self.key, role, self._n)
+        return str(uuid.uuid5(_NS, f"{self.key}/{role}/{self._n}"))
 
     def geometry(self, data: dict[str, Any]) -> str:
         """Add a geometry; return its UUID."""
@@ -145,7 +128,8 @@ class ObjectJSON:
         """Add a material of colour ``rgba``; return its UUID."""
         mid = self._id("material")
         alpha = float(rgba[3]) if len(rgba) > 3 else 1.0
-        data: dict[str, Any] = dict(uuid=mid, type=kind, color=_hex_color(rgba), side=2)
+        r, g, b = (int(round(255 * min(max(float(c), 0.0), 1.0))) for c in rgba[:3])
+        data: dict[str, Any] = dict(uuid=mid, type=kind, color=(r << 16) | (g << 8) | b, side=2)
         data.update(transparent=alpha < 1.0, opacity=alpha)
         if kind == "MeshPhongMaterial":
             data.update(reflectivity=0.5, shininess=40)
@@ -173,10 +157,8 @@ class ObjectJSON:
     ) -> dict[str, Any]:
         """One object node (Mesh, Group, Sprite, LineSegments) with its 4×4 ``matrix``."""
         out: dict[str, Any] = {"uuid": self._id("object"), "type": kind}
-        if geometry is not None:
-            out["geometry"] = geometry
-        if material is not None:
-            out["material"] = material
+        parts = (("geometry", geometry), ("material", material))
+        out.update({k: v for k, v in parts if v is not None})
         out["matrix"] = column_major(np.eye(4) if matrix is None else matrix)
         if children:
             out["children"] = children
@@ -198,13 +180,9 @@ class ObjectJSON:
 
 def cylinder(radius: float, length: float, segments: int = 32) -> dict[str, Any]:
     """three.js cylinder (axis y; rotate by Rx(π/2) for a URDF cylinder, axis z)."""
-    return {
-        "type": "CylinderGeometry",
-        "radiusTop": float(radius),
-        "radiusBottom": float(radius),
-        "height": float(length),
-        "radialSegments": segments,
-    }
+    r = float(radius)
+    kw = dict(radiusTop=r, radiusBottom=r, height=float(length), radialSegments=segments)
+    return {"type": "CylinderGeometry", **kw}
 
 
 def sphere(radius: float) -> dict[str, Any]:
@@ -281,7 +259,6 @@ def nice_step(x: float) -> float:
     return 10.0 ** (k + 1)  # pragma: no cover
 
 
-# ====================================================================== commands
 def set_object(path: str, obj: dict[str, Any]) -> dict[str, Any]:
     """The meshcat ``set_object`` command."""
     return {"type": "set_object", "path": path, "object": obj}

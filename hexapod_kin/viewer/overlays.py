@@ -24,7 +24,6 @@ from .objects import (
 from .trajectory import clip, track
 
 
-# ====================================================================== per-frame overlays
 def check_overlays(overlays: Any, n: int) -> dict[str, np.ndarray]:
     """Validate ``overlays``: name -> (N, M, 3) polylines, one per sample (M = 1: a point)."""
     if overlays is None:
@@ -39,10 +38,8 @@ def check_overlays(overlays: Any, n: int) -> dict[str, np.ndarray]:
         except (TypeError, ValueError):
             raise ConfigurationError(f"overlays[{name!r}] is not an array of numbers") from None
         if arr.ndim != 3 or arr.shape[0] != n or arr.shape[2] != 3 or arr.shape[1] < 1:
-            raise ConfigurationError(
-                f"overlays[{name!r}] has shape {arr.shape}; expected ({n}, M, 3): one polyline "
-                "of M points per sample (M = 1: a moving point)"
-            )
+            msg = f"overlays[{name!r}] has shape {arr.shape}; expected ({n}, M, 3): one polyline"
+            raise ConfigurationError(f"{msg} of M points per sample (M = 1: a moving point)")
         if not np.all(np.isfinite(arr)):
             raise ConfigurationError(f"overlays[{name!r}] contains non-finite values")
         out[str(name)] = arr

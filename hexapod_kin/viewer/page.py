@@ -26,7 +26,6 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..model import Model
 
 
-# ====================================================================== self-contained HTML
 #: The page may run its own inline code and decode data: URIs, and fetch nothing else.
 _CSP = (
     "default-src 'none'; script-src 'unsafe-inline' blob:; style-src 'unsafe-inline'; "
@@ -82,24 +81,22 @@ def render_html(
         model: A loaded model (``hexapod_kin.load(...)``).
         times: Sample times (N,) in [s], strictly increasing.
         qs: Joint configurations (N, nq) in [rad] / [m]. A single (nq,) shows a still pose.
-        base_poses: Optional world pose of the model's root per sample, (N, 4, 4) or one (4, 4)
-            (a floating body, e.g. a walking hexapod).
-        trace_frame: Frame(s) whose path is drawn: a name, a sequence of names, ``False`` for
-            none; default the tip (every foot for a hexapod).
-        frame_triads: ``True`` draws the Khalil frames 0..n of the chain (x red, y green,
-            z blue, labelled with the index j); or a sequence of frame names (labelled with
-            their position in the sequence).
-        singular_mask: Optional (N,) booleans; a red sphere marks the traced point at each
-            flagged (near-singular) sample.
+        base_poses: World pose of the root per sample, (N, 4, 4) or one (4, 4) (a floating
+            body, e.g. a walking hexapod).
+        trace_frame: Frame(s) whose path is drawn (``False``: none; default the tip, or every
+            foot of a hexapod).
+        frame_triads: ``True`` draws the Khalil frames 0..n (x red, y green, z blue, labelled
+            j); or a sequence of frame names (labelled by position).
+        singular_mask: (N,) booleans; a red sphere marks the traced point at each flagged
+            (near-singular) sample.
         title: Page title (default: the model's name).
         fps: Resample the animation at this rate in [frames/s] (default: the given samples,
             or 60 frames/s above :data:`MAX_SAMPLES` samples).
         loop: Repeat the animation forever (else play once).
         speed: Playback speed factor (> 0).
         play: Start playing when the page opens.
-        overlays: Optional mapping ``name -> (N, M, 3)`` array: a polyline of M world points
-            [m] per sample, drawn as thin tubes (M = 1: a moving sphere) under
-            ``/meshcat/overlays/<name>``.
+        overlays: ``name -> (N, M, 3)``: a polyline of M world points [m] per sample, drawn
+            as thin tubes (M = 1: a moving sphere) under ``/meshcat/overlays/<name>``.
 
     Raises:
         ConfigurationError: Bad ``times``/``qs``/``base_poses``/``singular_mask``/``overlays``.
@@ -160,11 +157,9 @@ def export_html(
 
 
 def iframe(html: str | os.PathLike[str], *, height: int = 480) -> str:
-    """An ``<iframe srcdoc=...>`` embedding an exported page (Jupyter, Colab, Binder).
+    """An ``<iframe srcdoc=...>`` embedding the page ``html`` wrote by :func:`export_html`.
 
-    Args:
-        html: Path of a file written by :func:`export_html`.
-        height: Frame height in [px] (100..4000).
+    ``height``: in [px] (100..4000).
 
     Raises:
         ParameterError: Bad ``height`` or not a file.

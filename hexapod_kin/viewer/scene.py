@@ -46,7 +46,6 @@ if TYPE_CHECKING:  # pragma: no cover
 PARTS = ("robot", "trace", "frames", "singular", "ground")
 
 
-# ====================================================================== the model's scene
 @dataclass(frozen=True)
 class Visual:
     """One drawn geometry: its meshcat path, three.js object and bounding radius [m]."""
@@ -61,16 +60,11 @@ LINK_RADIUS_FRACTION = 0.02
 
 
 def thickening(model: Model, objects: Sequence[Any]) -> tuple[float, float]:
-    """Factor for thin primitives so that links stay visible at the robot's scale.
+    """``(factor, rod radius [m])`` thin primitives grow by so that links stay visible.
 
-    The rod radius is the largest cylinder radius of the model's primitives; the drawn radius
-    is at least :data:`LINK_RADIUS_FRACTION` of the chain's length scale. Cylinders and
-    capsules of the rod radius or thinner, spheres up to 3 and boxes up to 6 rod radii grow by
-    the same factor (1 to 20); meshes and larger primitives are drawn as they are.
-
-    Returns:
-        ``(factor, rod radius [m])``; ``(1.0, 0.0)`` when the model has no cylinder.
-
+    The rod radius is the largest cylinder radius, drawn at least :data:`LINK_RADIUS_FRACTION`
+    of the chain's length scale; cylinders up to 1, spheres up to 3 and boxes up to 6 rod radii
+    grow by the factor (1 to 20). ``(1.0, 0.0)`` without a cylinder.
     """
     from .._numerics import chain_length
 
@@ -159,7 +153,11 @@ class Scene:
             intrinsic = np.diag(np.append(radii, 1.0))
         elif mesh_path and (mesh := mesh_geometry(g, normals=self.normals)) is not None:
             gid = obj.geometry(mesh.data)
-            radius = self._mesh_radius(g)  # the BVH has the mesh scale applied
+            try:  # the BVH has the mesh scale applied
+                g.computeLocalAABB()
+                radius = float(g.aabb_radius + np.linalg.norm(np.asarray(g.aabb_center)))
+            except (AttributeError, RuntimeError):
+                radius = 0.05
             intrinsic = mesh.matrix
         else:
             warnings.warn(f"viewer: geometry {go.name!r} of type {kind} is not drawn", stacklevel=3)
@@ -167,15 +165,6 @@ class Scene:
         root = obj.node("Mesh", geometry=gid, material=mat, matrix=intrinsic, name=name)
         return Visual(path, obj.lower(root), radius)
 
-    @staticmethod
-    def _mesh_radius(g: Any) -> float:
-        try:
-            g.computeLocalAABB()
-            return float(g.aabb_radius + np.linalg.norm(np.asarray(g.aabb_center)))
-        except (AttributeError, RuntimeError):
-            return 0.05
-
-    # -------------------------------------------------------------- placements
     def placements(self, qs: np.ndarray, base_poses: np.ndarray | None) -> np.ndarray:
         """World poses (N, G, 4, 4) of the drawn geometries."""
         import pinocchio as pin
@@ -210,7 +199,6 @@ def khalil_frames(model: Model) -> tuple[str, ...]:
     return tuple(names[start:])
 
 
-# ====================================================================== scene + animation
 def _resolve_trace_frames(model: Model, trace_frame: Any) -> tuple[str, ...]:
     """The frames whose path is drawn (``None``/``True``: the tip, or every foot)."""
     from ..params import Hexapod
@@ -382,10 +370,8 @@ def _camera_offset(
 ) -> np.ndarray:
     """Camera position (relative to the scene centre) that fits every ball in the view.
 
-    The camera looks at the centre from the direction (1, −1.25, 0.75) (front-right, above);
-    its distance is the smallest one for which every ball (``points`` (M, 3) relative to the
-    centre, ``radii`` (M,)) projects inside ``margin`` of the vertical field of view
-    ``fov_deg`` and of the horizontal one for an aspect ratio of at least ``min_aspect``.
+    From the direction (1, −1.25, 0.75), the nearest at which every ball (``points`` (M, 3),
+    ``radii`` (M,)) is inside ``margin`` of the field of view (aspect at least ``min_aspect``).
     """
     direction = np.array([1.0, -1.25, 0.75])
     direction /= np.linalg.norm(direction)
@@ -415,9 +401,7 @@ def _triad(key: str, length: float, label: str, stack: int = 0) -> dict[str, Any
         ("z", [0.1, 0.25, 0.9, 1.0], rotation("x", math.pi / 2)),
     )
     for i, (_axis, rgba, rot) in enumerate(axes):
-        offset = np.zeros(3)
-        offset[i] = length / 2
-        at = translation(offset) @ rot
+        at = translation(np.eye(3)[i] * (length / 2)) @ rot
         kids.append(o.node("Mesh", geometry=cyl, material=o.material(rgba), matrix=at))
     tex = o.text_texture(label)
     mat = o.material([1, 1, 1, 1], "SpriteMaterial", map=tex, depthTest=False, transparent=True)
@@ -430,10 +414,9 @@ def _triad(key: str, length: float, label: str, stack: int = 0) -> dict[str, Any
 def scene_commands(model: Model, times: Any, qs: Any, **options: Any) -> list[dict[str, Any]]:
     """The meshcat commands (dicts, before msgpack) that draw and animate a trajectory.
 
-    The same commands feed the offline page and :meth:`Viewer.animate`; the last one is the
-    ``set_animation`` when there is more than one sample. ``options``: the keywords of
-    :func:`build_for` (those of :func:`~hexapod_kin.viewer.page.render_html`, documented there,
-    but ``title`` and ``speed``).
+    As the offline page and :meth:`Viewer.animate` send them (the last: ``set_animation``,
+    with more than one sample); ``options``: :func:`~hexapod_kin.viewer.page.render_html`'s
+    keywords but ``title`` and ``speed``.
 
     Raises:
         ConfigurationError: Bad shapes or values of ``times``, ``qs``, ``base_poses``,

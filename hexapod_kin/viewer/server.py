@@ -33,10 +33,8 @@ LOOPBACK = "127.0.0.1"
 class MeshcatServer:
     """A meshcat server subprocess listening on 127.0.0.1 only, with free ports.
 
-    Use as a context manager (or call :meth:`close`). The child runs in its own process
-    group; :meth:`close` terminates the group (SIGTERM, then SIGKILL) and reaps it. It is
-    also closed at interpreter exit, and the child exits by itself when its parent dies (its
-    stdin pipe closes).
+    A context manager; :meth:`close` (also at interpreter exit) terminates the child's process
+    group and reaps it; the child exits by itself when its parent dies (its stdin closes).
 
     Attributes:
         web_url: ``http://127.0.0.1:PORT/static/`` (the page to open).
@@ -91,17 +89,13 @@ class MeshcatServer:
             while b"\n" not in buf:
                 left = deadline - time.monotonic()
                 if left <= 0:
-                    raise ViewerError(
-                        f"the meshcat server did not start within start_timeout={timeout} s; "
-                        f"its stderr: {self.stderr_tail()!r}"
-                    )
+                    msg = f"the meshcat server did not start within start_timeout={timeout} s"
+                    raise ViewerError(f"{msg}; its stderr: {self.stderr_tail()!r}")
                 if sel.select(min(left, 0.2)):
                     chunk = os.read(self._proc.stdout.fileno(), 4096)
                     if not chunk:
-                        raise ViewerError(
-                            f"the meshcat server exited with status {self._proc.wait(5)} before "
-                            f"starting; its stderr: {self.stderr_tail()!r}"
-                        )
+                        msg = f"the meshcat server exited with status {self._proc.wait(5)} before"
+                        raise ViewerError(f"{msg} starting; its stderr: {self.stderr_tail()!r}")
                     buf += chunk
         try:
             info = json.loads(buf.split(b"\n", 1)[0])
@@ -178,9 +172,8 @@ class Client:
         zmq = self._zmq
         sock = self._ctx.socket(zmq.REQ)
         ms = max(1, int(self.timeout * 1000))
-        sock.setsockopt(zmq.LINGER, 0)
-        sock.setsockopt(zmq.RCVTIMEO, ms)
-        sock.setsockopt(zmq.SNDTIMEO, ms)
+        for option, value in ((zmq.LINGER, 0), (zmq.RCVTIMEO, ms), (zmq.SNDTIMEO, ms)):
+            sock.setsockopt(option, value)
         sock.connect(self.server.zmq_url)
         self._sock = sock
 
@@ -188,10 +181,8 @@ class Client:
         if self._sock is None:
             raise ViewerError("the viewer is closed; open a new Viewer")
         if not self.server.running:
-            raise ViewerError(
-                f"the meshcat server (pid {self.server.pid}) is not running; stderr: "
-                f"{self.server.stderr_tail(500)!r}"
-            )
+            msg = f"the meshcat server (pid {self.server.pid}) is not running; stderr: "
+            raise ViewerError(msg + repr(self.server.stderr_tail(500)))
         try:
             self._sock.send_multipart(frames)
             return bytes(self._sock.recv())

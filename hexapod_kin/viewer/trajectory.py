@@ -25,7 +25,6 @@ if TYPE_CHECKING:  # pragma: no cover
 MAX_SAMPLES = 3000
 
 
-# ====================================================================== trajectories
 @dataclass(frozen=True)
 class Motion:
     """A checked trajectory: times (N,) [s], q (N, nq), root poses (N, 4, 4) or None."""
@@ -54,10 +53,9 @@ def check_base_poses(poses: Any, n: int) -> np.ndarray | None:
     err = np.abs(np.einsum("nji,njk->nik", rot, rot) - np.eye(3)).max()
     bottom = np.abs(arr[:, 3, :] - [0.0, 0.0, 0.0, 1.0]).max()
     if err > 1e-6 or bottom > 1e-9 or np.any(np.linalg.det(rot) < 0):
-        raise ConfigurationError(
-            f"base_poses are not rigid transforms (|RᵀR − I| = {err:.2e}, last row off by "
-            f"{bottom:.2e}); expected rotations with det +1 and a last row [0, 0, 0, 1]"
-        )
+        msg = f"base_poses are not rigid transforms (|RᵀR − I| = {err:.2e}, last row off by "
+        msg += f"{bottom:.2e}); expected rotations with det +1 and a last row [0, 0, 0, 1]"
+        raise ConfigurationError(msg)
     return arr
 
 
@@ -144,5 +142,4 @@ def clip(path: str, times: np.ndarray, T: np.ndarray) -> dict[str, Any]:
     """The animation clip (position and quaternion tracks, times [s]) of poses ``T`` (N, 4, 4)."""
     tracks = [track("position", "vector3", times, T[:, :3, 3])]
     tracks.append(track("quaternion", "quaternion", times, quaternions(T)))
-    # key times are in seconds
     return {"path": path, "clip": {"fps": 1.0, "name": "default", "tracks": tracks}}

@@ -32,11 +32,7 @@ def _joint_columns(run: Any, mdl: Any) -> list[int]:
 
 
 def _foot_frames(run: Any, mdl: Any) -> Any:
-    """The frame each foot of the run's robot is on, in the loaded model ``mdl`` (one per leg).
-
-    A foot given as a frame plus an offset is traced at its frame's origin. ``None`` (the
-    page's default) when the run carries no robot or ``mdl`` lacks one of the frames.
-    """
+    """The frame each foot of the run's robot is on (its origin traced), or None: the default."""
     wb = getattr(run, "robot", None)
     if wb is None:
         return None
@@ -74,12 +70,10 @@ def walk_page(run: Any, *, model: Any = None, title: str | None = None, **option
 
     Args:
         run: A :class:`~hexapod_kin.gait.walk.GaitRun`.
-        model: The loaded robot (default :func:`~hexapod_kin.gait.show.run_model`: the run's
-            own robot, ``run.robot``, or the built-in hexapod); its joints are matched to the
-            run's by name.
+        model: The loaded robot, joints matched to the run's by name (default
+            :func:`~hexapod_kin.gait.show.run_model`: ``run.robot`` or the built-in hexapod).
         title: Page title (default: pattern, terrain and the minimum margin).
-        **options: Passed to :func:`~hexapod_kin.viewer.page.render_html` (``fps``,
-            ``speed``...).
+        **options: Passed to :func:`~hexapod_kin.viewer.page.render_html` (``fps``...).
 
     Raises:
         OptionalDependencyError: The viewer extra (meshcat) is missing.
