@@ -438,8 +438,9 @@ def _ik_scara(fam: LegFamily, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _leg_slots(
-    targets: Any, lengths: tuple[Any, ...], height: float, sign: float, offsets: Any, tol: float,
-    limits: tuple[Any, Any] | None, lateral: Any = 0.0, joint_signs: Any = None,
+    targets: Any, lengths: tuple[Any, ...], *, height: float = 0.0, sign: float = -1.0,
+    offsets: Any = None, tol: float = 0.0, limits: tuple[Any, Any] | None = None,
+    lateral: Any = 0.0, joint_signs: Any = None,
 ) -> tuple[np.ndarray | None, list[np.ndarray], list[np.ndarray]]:  # fmt: skip
     """The leg closed form as columns on the targets a branch reaches.
 
@@ -566,9 +567,8 @@ def leg_solutions(
 
     """
     n = len(np.asarray(targets).reshape(-1, 3))
-    sub, cols, oks = _leg_slots(
-        targets, lengths, height, sign, offsets, tol, limits, lateral, joint_signs
-    )
+    sub, cols, oks = _leg_slots(targets, lengths, height=height, sign=sign, offsets=offsets,
+                                tol=tol, limits=limits, lateral=lateral, joint_signs=joint_signs)  # fmt: skip
     nq, k = len(lengths), 2 * len(lengths) - 2  # 2 slots (2 DOF) or 4 (3 DOF)
     q = np.full((k * nq, n), np.nan)  # slot-major rows, one column per target
     valid = np.zeros((k, n), dtype=bool)
@@ -580,22 +580,9 @@ def leg_solutions(
     return q.T.reshape(n, k, nq), valid.T
 
 
-def leg_reachable(
-    targets: Any,
-    lengths: tuple[Any, ...],
-    *,
-    height: float = 0.0,
-    sign: float = -1.0,
-    offsets: Any = None,
-    tol: float = 0.0,
-    limits: tuple[Any, Any] | None = None,
-    lateral: Any = 0.0,
-    joint_signs: Any = None,
-) -> np.ndarray:
-    """(N,) True where :func:`leg_solutions` has a valid slot (same arguments)."""
-    sub, _, oks = _leg_slots(
-        targets, lengths, height, sign, offsets, tol, limits, lateral, joint_signs
-    )
+def leg_reachable(targets: Any, lengths: tuple[Any, ...], **options: Any) -> np.ndarray:
+    """(N,) True where :func:`leg_solutions` has a valid slot (its arguments and keywords)."""
+    sub, _, oks = _leg_slots(targets, lengths, **options)
     if sub is None:
         return np.logical_or.reduce(oks)
     out = np.zeros(len(np.asarray(targets).reshape(-1, 3)), dtype=bool)
