@@ -412,14 +412,6 @@ def _usable(
     return budget is not None and tried is not None and budget <= tried
 
 
-def _tried(found: Mapping[str, Any] | None, budget: float | None) -> float | None:
-    """The budget an unfinished run is kept with: the larger of this one and the earlier."""
-    before = (found or {}).get(ATTEMPT)
-    if budget is not None and before is not None and before[1] is not None:
-        return max(budget, before[1])
-    return budget
-
-
 def _checked_load(
     chain: Chain, lengths: Any, digest: str, then: str, stacklevel: int = 2
 ) -> dict[str, Any] | None:
@@ -503,11 +495,7 @@ def derive(
     """
     if budget is not None and (not isinstance(budget, (int, float)) or not budget > 0):
         raise ParameterError(f"budget={budget!r} is not allowed; a time in seconds > 0 or None")
-    chain, reference, tip_name = _chain_of(source, base, tip)
-    if rows is not None:
-        row_indices(rows)
-    syms = _core.length_symbols(chain, lengths)  # validates names early
-    digest = _cache_key(chain, rows, lengths)
+    chain, reference, tip_name, syms, digest = _start(source, base, tip, rows, lengths)
     found = _MEMO.get(digest) if cache else None
     run_for = budget if within is None else min(within, budget or math.inf)
     done: dict[str, Any] = {}
@@ -537,7 +525,10 @@ def derive(
     else:
         write = cache and not unread
         have = {k: v for k, v in (found or {}).items() if k != ATTEMPT}
-        tried = _tried(found, budget)
+        before = (found or {}).get(ATTEMPT)  # kept with the larger of this budget and the last
+        tried = budget
+        if budget is not None and before is not None and before[1] is not None:
+            tried = max(budget, before[1])
         if reason is not None and cache:
             _cache.sweep(digest)
         stages = {**have, **done}
@@ -556,6 +547,15 @@ def derive(
             _MEMO.clear()
         _MEMO[digest] = stages
     return _assemble(chain, reference, tip_name, syms, stages, reason, from_cache, rows)
+
+
+def _start(source: Any, base: Any, tip: Any, rows: Any, lengths: Any) -> tuple[Any, ...]:
+    """``(chain, reference, tip, length symbols, cache key)``, the arguments checked first."""
+    chain, reference, tip_name = _chain_of(source, base, tip)
+    if rows is not None:
+        row_indices(rows)
+    syms = _core.length_symbols(chain, lengths)  # validates names early
+    return chain, reference, tip_name, syms, _cache_key(chain, rows, lengths)
 
 
 def _assemble(
@@ -612,11 +612,7 @@ def cached(source: Any, rows: str | Sequence[str] | None = None) -> Derivation |
     (:class:`~hexapod_kin.exceptions.ParameterError`) are those of :func:`derive`.
 
     """
-    chain, reference, tip_name = _chain_of(source, None, None)
-    if rows is not None:
-        row_indices(rows)
-    digest = _cache_key(chain, rows, None)
-    syms = _core.length_symbols(chain, None)
+    chain, reference, tip_name, syms, digest = _start(source, None, None, rows, None)
     stages = _MEMO.get(digest)
     if stages is None:
         stages = _checked_load(chain, None, digest, "not used", stacklevel=3)
