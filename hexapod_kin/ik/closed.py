@@ -568,7 +568,8 @@ def leg_solutions(
     """
     n = len(np.asarray(targets).reshape(-1, 3))
     sub, cols, oks = _leg_slots(targets, lengths, height=height, sign=sign, offsets=offsets,
-                                tol=tol, limits=limits, lateral=lateral, joint_signs=joint_signs)  # fmt: skip
+                                tol=tol, limits=limits, lateral=lateral,
+                                joint_signs=joint_signs)  # fmt: skip
     nq, k = len(lengths), 2 * len(lengths) - 2  # 2 slots (2 DOF) or 4 (3 DOF)
     q = np.full((k * nq, n), np.nan)  # slot-major rows, one column per target
     valid = np.zeros((k, n), dtype=bool)

@@ -87,10 +87,7 @@ _MAX_TABLE_BYTES = 1 << 30
 
 
 def table_paths(out: str | Path) -> dict[str, Path]:
-    """The table and the resumable chunks' sidecar of ``out``.
-
-    ``x.csv`` → ``{"csv": x.csv, "parts": .x.csv.sweep-parts}`` (likewise ``.parquet``,
-    ``.json``).
+    """The table and chunks' sidecar: ``x.csv`` → ``{"csv": x.csv, "parts": .x.csv.sweep-parts}``.
 
     Raises:
         ParameterError: ``out`` has another extension.
@@ -432,13 +429,7 @@ def _write_tables(
 
 
 def read_results(path: str | Path) -> dict[str, np.ndarray]:
-    """Read a sweep table written by :func:`sweep` (CSV, Parquet or JSON) as column → array.
-
-    Args:
-        path: The ``.csv``, ``.parquet`` or ``.json`` file.
-
-    Returns:
-        Column name → (N,) float array.
+    """A sweep table written by :func:`sweep` (``.csv``, ``.parquet``, ``.json``): column → (N,).
 
     Raises:
         ParameterError: An unknown suffix.

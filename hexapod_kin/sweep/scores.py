@@ -179,13 +179,7 @@ def _score(d: np.ndarray, unit: np.ndarray, line: int, points: int, use: float) 
 
 
 def unit_samples(seed: int, n: int) -> np.ndarray:
-    """The (n, 3) uniform unit samples of the Monte-Carlo volume (the same for every design).
-
-    Args:
-        seed: The sweep's seed.
-        n: Number of samples.
-
-    """
+    """The (n, 3) uniform unit samples of the Monte-Carlo volume for the sweep's ``seed``."""
     return np.random.Generator(np.random.PCG64([int(seed), 0x5EED])).random((int(n), 3))
 
 
@@ -198,15 +192,10 @@ def score_designs(
     stride_points: int = 64,
     stride_use: float = 0.9,
 ) -> dict[str, np.ndarray]:
-    """Score designs (rows of :data:`~hexapod_kin.sweep.designs.PARAMETERS`), vectorised.
+    """Score designs, (N, 13) rows of :data:`~hexapod_kin.sweep.designs.PARAMETERS` (SI units).
 
-    Args:
-        designs: (N, 13) array, columns ``PARAMETERS`` (SI units).
-        mc_samples: Monte-Carlo points per design for the volume.
-        seed: Seed of the (common) Monte-Carlo samples.
-        line_points: Grid steps per side of the stride search (then bisection).
-        stride_points: Points along the stride for the σ/singularity/limit minima.
-        stride_use: Central fraction of the stride over which those minima are taken.
+    The options are :func:`~hexapod_kin.sweep.sweep`'s (``seed``: of the common Monte-Carlo
+    samples; ``line_points``: grid steps per side of the stride search, then bisection).
 
     Returns:
         Column name → (N,) float array, the names of :data:`SCORES` (each design's scores
@@ -249,15 +238,9 @@ def score_designs(
 
 
 def reachable(designs_row: Any, points: Any) -> np.ndarray:
-    """Exact membership test of the sweep for one design: (N,) bool.
+    """(N,) True where one design (13 values, ``PARAMETERS``) reaches ``points`` (N, 3) [m].
 
-    Args:
-        designs_row: One design (13 values, columns ``PARAMETERS``).
-        points: (N, 3) foot positions in the hip frame [m].
-
-    Returns:
-        True where some IK solution lies within the joint limits.
-
+    The sweep's exact test: some IK solution in the hip frame lies within the joint limits.
     """
     row = np.asarray(designs_row, dtype=float)
     pts = np.asarray(points, dtype=float).reshape(-1, 3)
@@ -293,18 +276,8 @@ def volume_closed_form(
     section at signed distance ``l1 + u`` is a set of intervals S_z, reached with q1 = φ or
     φ + π: ``V = ∫ dz [Δ/2 (M(P) + M(N)) − max(Δ − π, 0) M(P ∩ N)]``, ``P = S_z ∩ (0, ∞)``,
     ``N = (−S_z) ∩ (0, ∞)``, ``M(X) = Σ (hi² − lo²)``, integrated in closed form between
-    breakpoints. The seed leg, full rotation: 0.05637 m³.
-
-    Args:
-        l1: Coxa length [m].
-        l2: Femur length [m].
-        l3: Tibia length [m].
-        q1_lower: Hip lower limit [rad].
-        q1_upper: Hip upper limit [rad].
-        q2_lower: Knee lower limit [rad].
-        q2_upper: Knee upper limit [rad].
-        q3_lower: Ankle lower limit [rad].
-        q3_upper: Ankle upper limit [rad].
+    breakpoints. The seed leg, full rotation: 0.05637 m³. Lengths ``l1`` (coxa), ``l2``
+    (femur), ``l3`` (tibia) in [m]; the hip, knee and ankle limits in [rad].
 
     Returns:
         The volume in [m³], or NaN when the knee range is narrower than 2π (no closed form).
