@@ -397,15 +397,9 @@ def _is_local_min(
 def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -> list[IKResult]:
     """:func:`solve` for N targets of one kind, the loops in one compiled call (a batch API).
 
-    Args:
-        model: A loaded model or anything :func:`hexapod_kin.load` takes.
-        targets: (N, 3) positions, (N, 4) positions + yaw, or (N, 4, 4) poses.
-        q0: None (the default start of :func:`solve`), one start (nq,) for all, or (N, nq)
-            starts.
-        **options: As in :func:`solve` (one set for all targets).
-
-    Returns:
-        One :class:`IKResult` per target, the same bits as :func:`solve` of that target.
+    ``targets``: (N, 3) positions, (N, 4) positions + yaw, or (N, 4, 4) poses; ``q0``: None
+    (:func:`solve`'s default start), one (nq,) start for all, or (N, nq); ``options`` as
+    :func:`solve`'s, for all. Returns one :class:`IKResult` per target, :func:`solve`'s bits.
 
     Raises:
         IKError: Bad targets (as :func:`solve`). ConfigurationError: ``q0`` rows do not match.
@@ -487,14 +481,9 @@ def solve_chain(
     On a :class:`~hexapod_kin._chain.ChainArrays` (a leg: mount → foot), position rows only,
     no restarts, no posture; limited joints are clamped, continuous ones wrap.
 
-    Args:
-        chain: The chain's placements, axes and tip (its frame: the targets' frame).
-        targets: (N, 3) tip positions [m].
-        seeds: (N, nq) start configurations (e.g. the previous sample's solution).
-        lower: (nq,) lower joint limits [rad]/[m].
-        upper: (nq,) upper joint limits.
-        tol: Convergence threshold on the position error [m].
-        max_iter: Accepted steps per target.
+    ``targets`` (N, 3) [m] in the chain's frame, ``seeds`` (N, nq) starts (e.g. the previous
+    sample's solution), ``lower`` / ``upper`` (nq,) limits [rad]/[m], ``tol`` [m] on the
+    position error, ``max_iter`` accepted steps per target.
 
     Returns:
         ``(q (N, nq), residual (N,) [m], converged (N,))``: the best configuration found,

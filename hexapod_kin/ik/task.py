@@ -272,13 +272,10 @@ def _limit(model: Any) -> float:
 def check_within(
     model: Any, positions: Any, parameter: str = "target", kind: type[HexapodKinError] = IKError
 ) -> None:
-    """Refuse target positions beyond :data:`TARGET_FACTOR` × the robot's size, at once.
+    """Refuse (3,) or (N, 3) ``positions`` [m] beyond :data:`TARGET_FACTOR` × the robot's size.
 
-    Args:
-        model: A loaded model (``cached`` and ``model``: :class:`hexapod_kin.model.Model`).
-        positions: (3,) or (N, 3) positions [m] in the base frame.
-        parameter: The name of the argument in the error.
-        kind: The error's class (one of the package's).
+    ``model``: a loaded :class:`hexapod_kin.model.Model`; the error names ``parameter`` and is
+    of class ``kind`` (one of the package's).
 
     Raises:
         IKError: (or ``kind``) A position with ``|x|``, ``|y|`` or ``|z|`` over the limit.

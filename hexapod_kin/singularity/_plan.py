@@ -198,14 +198,10 @@ def aligned(model: Any) -> AlignedChain:
 def compute(
     model: Any, q: np.ndarray, sel: np.ndarray, out: tuple[np.ndarray, ...]
 ) -> tuple[np.ndarray, ...]:
-    """Fill ``out`` = (det, manipulability, condition, sigma_min) for the rows ``sel`` of ``J``.
+    """Fill ``out`` = (det, manipulability, condition, sigma_min), four (N,) float64 arrays.
 
-    Args:
-        model: A loaded model.
-        q: (N, nq) float64 C-contiguous configurations, checked by the caller.
-        sel: (k,) int64 row indices of ``[vx vy vz wx wy wz]``.
-        out: Four (N,) float64 arrays.
-
+    ``q``: (N, nq) float64 C-contiguous configurations, checked by the caller; ``sel``: (k,)
+    int64 indices of the rows ``[vx vy vz wx wy wz]`` of ``J``.
     """
     n, al = q.shape[0], aligned(model)
     key = tuple(int(r) for r in sel)

@@ -357,13 +357,7 @@ def _derive_job(
 
 
 def _derived(chain: Any, rows: tuple[str, ...], budget: float, qs: np.ndarray) -> tuple[Any, ...]:
-    """:func:`_derive_job`'s answer, from a process of its own unless sympy is loaded here.
-
-    Returns:
-        ``(incomplete, kind, values, families)``, or ``("failed", message)`` (also when the
-        child ended without an answer).
-
-    """
+    """:func:`_derive_job`'s answer or ``("failed", message)``; own process unless sympy's here."""
     from .. import _budget
 
     args = (chain, rows, float(budget), qs)
@@ -381,9 +375,7 @@ def _derived(chain: Any, rows: tuple[str, ...], budget: float, qs: np.ndarray) -
 def _numeric_families(
     kind: str | None, sym: Any, qs: np.ndarray, model: Any, rows: tuple[str, ...]
 ) -> None:
-    """Check the derivation's ``|det|`` (``kind`` ``"det"``) or ``|det(J Jᵀ)|`` (``"gram"``).
-
-    ``sym`` holds its values at ``qs``, compared with the model's Jacobian there.
+    """Check the derivation's ``|det|`` or ``|det(J Jᵀ)|`` (``kind``), ``sym`` at ``qs``, on J.
 
     Raises:
         ParameterError: No determinant derived, or they differ (other frames or rows).
@@ -410,15 +402,10 @@ def _numeric_families(
 def families_for(
     model: Any, rows: tuple[str, ...], *, derive: bool = False, budget: float = 10.0
 ) -> Families:
-    """The singular families of ``model`` for the Jacobian rows ``rows``.
+    """The singular families of a loaded ``model`` for the Jacobian rows ``rows`` (names).
 
-    Args:
-        model: A loaded model.
-        rows: Row names (see :mod:`hexapod_kin.jacobian_rows`).
-        derive: Derive them with sympy (within ``budget``) when they are not on disk yet;
-            without it, only families already derived (the call never waits on sympy).
-        budget: CPU budget in [s] of the derivation (a stopped one is kept with its budget; a
-            larger one carries on).
+    ``derive``: derive them with sympy within ``budget`` (CPU [s]; a stopped run is kept with
+    its budget, a larger one carries on) when not on disk yet; else the call never waits.
 
     Raises:
         ParameterError: ``budget`` not a finite value > 0.

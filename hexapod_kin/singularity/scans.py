@@ -245,14 +245,8 @@ def default_q_fixed(
     """A dexterous configuration for the joints that a scan does not move, in [rad]/[m].
 
     Among 256 seeded random configurations, the one whose worst ``σmin/σmax`` over a coarse
-    grid (5 points per joint) of the scanned ``joints`` is largest.
-
-    Args:
-        model: A loaded model (or a source).
-        rows: Row selection (default :func:`~.measure.default_rows`).
-        joints: Indices of the scanned joints.
-        seed: Seed of the candidates.
-
+    grid (5 points per joint) of the scanned ``joints`` (indices) is largest. ``rows``: the row
+    selection (default :func:`~.measure.default_rows`); ``seed``: of the candidates.
     """
     mdl = as_model(model)
     names = selected_rows(mdl, rows)
@@ -287,14 +281,7 @@ def default_joints(model: Any, rows: Any = None, count: int = 2) -> tuple[int, .
 
     Each joint that moves the tip is swept over its range at 32 seeded configurations of the
     others; its score is the mean spread of ``log σmin`` (ties: revolute, then later joints).
-
-    Args:
-        model: A loaded model (or a source).
-        rows: Row selection (default :func:`~.measure.default_rows`).
-        count: How many joints.
-
-    Returns:
-        Joint indices, ascending.
+    ``rows`` as :func:`default_q_fixed`'s. Returns joint indices, ascending.
 
     Raises:
         ParameterError: The model has fewer than ``count`` joints.
