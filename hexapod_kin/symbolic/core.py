@@ -272,12 +272,9 @@ def _frames_in(transforms: Sequence[sp.Matrix], m: int) -> list[sp.Matrix]:
 def frame_jacobian(
     chain: Chain, frames: Sequence[sp.Matrix], point: sp.Matrix
 ) -> tuple[sp.Matrix, bool]:
-    """6×n Jacobian with the axes of the frame ``frames`` are expressed in, at ``point``.
+    """``(J, block_triangular)``: the 6×n J at ``point`` in the axes ``frames`` are expressed in.
 
-    Returns:
-        ``(J, block_triangular)``; block-triangular when the last three columns have no
-        linear part (a spherical wrist seen from its centre).
-
+    Block-triangular: the last three columns have no linear part (a wrist seen from its centre).
     """
     cols = []
     for j in chain.joint_rows:
@@ -343,12 +340,10 @@ def _depends(expr: Any, q: Sequence[sp.Symbol]) -> bool:
 def trig_factor(
     expr: Any, q: Sequence[sp.Symbol], sigmas: Sequence[str]
 ) -> tuple[Any, list[tuple[Any, int]]]:
-    """Factor a trigonometric polynomial in ``q`` into irreducible factors.
+    """``(constant, [(factor, multiplicity), ...])``: a trig polynomial in ``q`` factored.
 
-    Returns:
-        ``(constant, [(factor, multiplicity), ...])`` with factors in compact trigonometric
-        form; the product ``constant · Π factor**mult`` equals ``expr``.
-
+    The factors are irreducible, in compact trigonometric form; ``constant · Π factor**mult``
+    equals ``expr``.
     """
     return _factor_poly(_to_poly(expr, q, sigmas), q)
 

@@ -113,14 +113,9 @@ class Derivation:
         return sp.sympify(expr).subs(dict(self.lengths))
 
     def function(self, expr: Any) -> Callable[[np.ndarray], np.ndarray]:
-        """A vectorised numpy function of ``q`` for ``expr`` (lengths substituted).
+        """``f(Q)`` of a sympy expression or matrix in ``q``, lengths substituted, vectorised.
 
-        Args:
-            expr: A sympy expression or matrix in the joint symbols.
-
-        Returns:
-            ``f(Q)`` with ``Q`` (n,) or (N, n): shape () or (N,), matrices (…, rows, cols).
-
+        ``Q`` (n,) or (N, n) gives shape () or (N,); matrices (…, rows, cols).
         """
         num = self.numeric(expr)
         is_matrix = isinstance(num, sp.MatrixBase)
