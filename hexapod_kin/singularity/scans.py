@@ -315,27 +315,17 @@ def _grid_points(
     model: Any, joints: tuple[int, ...], grid: Any, q_fixed: np.ndarray
 ) -> tuple[np.ndarray, tuple[int, ...]]:
     counts: list[Any] = [grid] * len(joints) if np.isscalar(grid) else list(grid)
-    if len(counts) != len(joints):
-        raise ParameterError(
-            f"grid={grid!r}: one count or one per scanned joint ({len(joints)}) is required",
-            parameter="grid",
-            value=grid,
-            allowed=f"an integer >= 2 or {len(joints)} of them",
-        )
-    shape = []
-    for c in counts:
-        if not _count(c, 2):
-            msg = f"grid={grid!r}: counts must be integers >= 2"
-            raise ParameterError(msg, parameter="grid", value=grid, allowed="integers >= 2")
-        shape.append(int(c))
-    total = math.prod(shape)
-    if total > MAX_CONFIGURATIONS:
-        raise ParameterError(
-            f"grid={grid!r} makes {total} configurations; at most {MAX_CONFIGURATIONS:,}",
-            parameter="grid",
-            value=grid,
-            allowed=f"at most {MAX_CONFIGURATIONS:,} configurations in all",
-        )
+    shape = [int(c) for c in counts if _count(c, 2)]
+    total, most = math.prod(shape), f"{MAX_CONFIGURATIONS:,}"
+    for bad, why, a in (  # the first that fails
+        (len(counts) != len(joints), f": one count or one per scanned joint ({len(joints)}) is "
+         "required", f"an integer >= 2 or {len(joints)} of them"),
+        (len(shape) != len(counts), ": counts must be integers >= 2", "integers >= 2"),
+        (total > MAX_CONFIGURATIONS, f" makes {total} configurations; at most {most}",
+         f"at most {most} configurations in all"),
+    ):  # fmt: skip
+        if bad:
+            raise ParameterError(f"grid={grid!r}{why}", parameter="grid", value=grid, allowed=a)
     axes = [np.linspace(model.lower[j], model.upper[j], c) for j, c in zip(joints, shape)]
     q = np.empty((*shape, model.nq))
     q[...] = q_fixed
