@@ -94,10 +94,7 @@ def _build(node: ast.expr) -> Any:
         items = [_literal(e) for e in node.elts]
         return items if isinstance(node, ast.List) else tuple(items)
     if isinstance(node, (ast.Constant, ast.UnaryOp)):
-        value = _literal(node)
-        if isinstance(value, (ast.AST,)):  # pragma: no cover - _literal returns values
-            raise CacheFormatError("unexpected literal")
-        return value
+        return _literal(node)
     if isinstance(node, ast.Call):
         if not isinstance(node.func, ast.Name) or node.func.id not in _CALLABLES:
             what = node.func.id if isinstance(node.func, ast.Name) else type(node.func).__name__
