@@ -26,7 +26,6 @@ from ._numbers import numeric_jacobian as numeric_jacobian
 from ._numbers import sigma_ratio as sigma_ratio
 from ._numbers import single_joint_roots as single_joint_roots
 from ._trigpoly import _chop, _det_poly, _reduce, _to_poly, _trig_symbols
-from .fallback import affine, product, z_cross
 
 
 def khalil_matrix(alpha: Any, d: Any, theta: Any, r: Any) -> sp.Matrix:
@@ -78,6 +77,35 @@ def _expand(expr: Any) -> Any:
 
 def _same(expr: Any) -> Any:
     return expr
+
+
+# the budget's fallback (stage 1 unfinished): products as unevaluated sums (evaluate=False,
+# zeros dropped, ones skipped), built in milliseconds, equal in value, never printed
+def product(a: sp.Matrix, b: sp.Matrix) -> sp.Matrix:
+    """``a·b`` as unevaluated sums of unevaluated products."""
+
+    def entry(i: int, j: int) -> Any:
+        terms = []
+        for k in range(a.cols):
+            x, y = a[i, k], b[k, j]
+            if x == 0 or y == 0:
+                continue
+            terms.append(x if y == 1 else y if x == 1 else sp.Mul(x, y, evaluate=False))
+        if not terms:
+            return sp.Integer(0)
+        return terms[0] if len(terms) == 1 else sp.Add(*terms, evaluate=False)
+
+    return sp.Matrix(a.rows, b.cols, entry)
+
+
+def affine(t: sp.Matrix, v: sp.Matrix) -> sp.Matrix:
+    """``R v + o`` for the homogeneous transform ``t`` = [R o; 0 1] and a 3-vector ``v``."""
+    return product(t[:3, :], sp.Matrix([*v, 1]))
+
+
+def z_cross(rot: sp.Matrix, v: sp.Matrix) -> sp.Matrix:
+    """``R (z × v)`` = ``R[:, 1] v_x − R[:, 0] v_y`` (a revolute column of the Jacobian)."""
+    return product(rot[:, :2], sp.Matrix([sp.Mul(-1, v[1], evaluate=False), v[0]]))
 
 
 def _rotation(rot: np.ndarray) -> sp.Matrix:
