@@ -394,16 +394,6 @@ def _summary(table: Mapping[str, np.ndarray], spec: dict[str, Any], key: str) ->
     }
 
 
-def _csv_text(table: Mapping[str, np.ndarray]) -> str:
-    names = list(table)
-    cols = [np.asarray(table[c]) for c in names]
-    ints = {"index", "feasible", "volume_exact", "pareto"}
-    cells = [
-        [str(int(v)) if nm in ints else repr(float(v)) for v in c] for nm, c in zip(names, cols)
-    ]
-    return "\n".join([",".join(names), *(",".join(row) for row in zip(*cells))]) + "\n"
-
-
 def _write_tables(
     table: Mapping[str, np.ndarray], summary: dict[str, Any], paths: dict[str, Path]
 ) -> dict[str, str]:
@@ -412,7 +402,11 @@ def _write_tables(
 
     kind, path = next((k, v) for k, v in paths.items() if k != "parts")
     if kind == "csv":
-        atomic_write(path, _csv_text(table))
+        ints = {"index", "feasible", "volume_exact", "pareto"}
+        cells = [[str(int(v)) if nm in ints else repr(float(v)) for v in np.asarray(c)]
+                 for nm, c in table.items()]  # fmt: skip
+        rows = (",".join(row) for row in zip(*cells))
+        atomic_write(path, "\n".join([",".join(table), *rows]) + "\n")
     elif kind == "parquet":
         import pyarrow as pa
         import pyarrow.parquet as pq

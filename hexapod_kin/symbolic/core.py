@@ -280,18 +280,14 @@ def _indirect(p: sp.Matrix, q: Sequence[sp.Symbol], sigmas: Sequence[str]) -> sp
     return sp.Matrix(rows)
 
 
-def _inverse(t: sp.Matrix) -> sp.Matrix:
-    rot, pos = t[:3, :3], t[:3, 3]
-    return _homogeneous(rot.T, -rot.T * pos)
-
-
 def _frames_in(transforms: Sequence[sp.Matrix], m: int) -> list[sp.Matrix]:
     """``^mT_k`` for every Khalil frame k = 0..N (cheaply simplified)."""
     n_rows = len(transforms)
     frames: list[Any] = [None] * (n_rows + 1)
     frames[m] = sp.eye(4)
     for k in range(m - 1, -1, -1):
-        frames[k] = cheap(frames[k + 1] * _inverse(transforms[k]))
+        rot, pos = transforms[k][:3, :3], transforms[k][:3, 3]
+        frames[k] = cheap(frames[k + 1] * _homogeneous(rot.T, -rot.T * pos))
     for k in range(m + 1, n_rows + 1):
         frames[k] = cheap(frames[k - 1] * transforms[k - 1])
     return frames
@@ -591,13 +587,6 @@ def _deficiency(
 
 
 # ---------------------------------------------------------------------- printing
-def _trig_power(expr: Any) -> bool:
-    return any(
-        p.base.func in (sp.sin, sp.cos) and p.exp.is_Integer and p.exp > 1
-        for p in expr.atoms(sp.Pow)
-    )
-
-
 def _collect_trig(expr: Any) -> Any:
     """Terms grouped by their trigonometric part, each coefficient factored (an identity)."""
     groups: dict[Any, list[Any]] = {}
@@ -623,7 +612,9 @@ def tidy(expr: Any, q: Sequence[sp.Symbol], sigmas: Sequence[str], ops: int = 40
         return expr
     best, size = expr, sp.count_ops(expr)
     try:
-        e = _reduce(_to_poly(expr, q, sigmas), q) if _trig_power(expr) else expr
+        powers = (p.base.func in (sp.sin, sp.cos) and p.exp.is_Integer and p.exp > 1
+                  for p in expr.atoms(sp.Pow))  # fmt: skip
+        e = _reduce(_to_poly(expr, q, sigmas), q) if any(powers) else expr
         e = _to_trig(e, q) if e is not expr else cheap(e)  # folds angle sums
         forms = (e, _collect_trig(e))
     except (sp.PolynomialError, TypeError, ValueError):  # an entry outside the trig ring
