@@ -37,17 +37,10 @@ _CHECK_BUDGET = 10.0
 # ------------------------------------------------------------------------ one family
 @dataclass(frozen=True)
 class Family:
-    """One singular family, as numbers (no sympy objects).
+    """One singular family, as numbers: :class:`hexapod_kin.symbolic.SingularFamily`'s fields.
 
-    Attributes:
-        name: A readable label, e.g. ``"q3 = 0 (mod 2*pi)"``.
-        equation: The equation as text (lengths symbolic), e.g. ``"Eq(q3, 0)"``.
-        variables: Indices (0-based) of the joints the factor depends on.
-        joint: Index of the joint when the family is ``q_k = value``, else ``None``.
-        value: That value in [rad] or [m] (``None`` for implicit families).
-        periodic: True when ``value`` repeats every 2π (revolute joint).
-        factor: The factor (text, lengths substituted), zero on the family.
-
+    No sympy objects: ``equation`` is text (lengths symbolic, e.g. ``"Eq(q3, 0)"``) and
+    ``factor`` too (lengths substituted), compiled once (:func:`~._zeroset.compile_factor`).
     """
 
     name: str

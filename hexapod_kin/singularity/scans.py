@@ -86,10 +86,8 @@ class ScanResult:
 
     Attributes:
         q: Configurations (N, n) in [rad] / [m].
-        det: ``det J`` (N,) (NaN where J is not square).
-        manipulability: (N,) ``sqrt(det(J Jᵀ))``.
-        condition: (N,) ``σmax/σmin`` (``inf`` where singular).
-        sigma_min: (N,) smallest singular value ([m] for position rows of revolute joints).
+        det: (N,), and ``manipulability``, ``condition``, ``sigma_min``: as in
+            :class:`~.measure.MeasuresBatch`.
         singular: (N,) boolean mask ``sigma_min < threshold`` or ``sigma_min = 0``.
         family: (N,) index into :attr:`families` of the nearest family of each flagged
             configuration (−1: none).
