@@ -485,13 +485,8 @@ def _leg_slots(
     def take(a: Any) -> Any:
         return a if full or np.ndim(a) == 0 else a[..., sub]
 
-    x, h, w, us, reach = (
-        x[sub] if not full else x,
-        take(h),
-        take(w),
-        [take(u) for u in us],
-        [take(r) for r in reach],
-    )
+    x, h, w = (x if full else x[sub]), take(h), take(w)
+    us, reach = [take(u) for u in us], [take(r) for r in reach]
     l1, l2, l3 = take(np.asarray(l1)), take(np.asarray(l2)), take(np.asarray(l3))
     if side:
         e = take(np.asarray(e, dtype=np.float64))
