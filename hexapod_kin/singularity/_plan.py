@@ -65,16 +65,13 @@ def block_plan(k: int, n: int) -> tuple[bool, np.ndarray, np.ndarray, np.ndarray
 
 @dataclass(frozen=True)
 class GramPlan:
-    """How :func:`_reduce_block` treats one chain and row selection (see :func:`_gram_plan`).
+    """How the kernel's ``_reduce_block`` treats one chain and row selection (:func:`gram_plan`).
 
-    Attributes:
-        use_block: Whether the block path applies (``m = min(k, n) ≤ 6``, few minors).
-        gram_t: ``G = Jᵀ J`` (else ``J Jᵀ``).
-        perm: (m,) indices of ``G`` ordered by diagonal block.
-        csize: (c,) sizes of the diagonal blocks (one block of size m: no split).
-        drop: Packed positions of the entries between blocks (zero at random samples).
-        arrays: The tuple the kernel takes: ``(pack, rsub, csub, gram_t, perm, csize, drop)``.
-
+    ``use_block``: the block path applies (``m = min(k, n) ≤ 6``, few minors); ``gram_t``:
+    ``G = Jᵀ J`` (else ``J Jᵀ``); ``perm`` (m,): indices of ``G`` by diagonal block; ``csize``
+    (c,): their sizes (one of size m: no split); ``drop``: packed positions of the entries
+    between blocks (zero at random samples); ``arrays``: the kernel's tuple ``(pack, rsub,
+    csub, gram_t, perm, csize, drop)``.
     """
 
     use_block: bool

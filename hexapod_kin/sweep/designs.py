@@ -152,17 +152,11 @@ class DesignSpace:
     def designs(
         self, method: str = "grid", samples: int = 100, seed: int = 0, first: int | None = None
     ) -> np.ndarray:
-        """The designs as a (N, len(PARAMETERS)) array, one row per design, columns PARAMETERS.
+        """The designs, a read-only (N, len(PARAMETERS)) array: one row per design.
 
-        Args:
-            method: ``"grid"`` (cartesian product of the ranges), ``"random"`` (uniform) or
-                ``"lhs"`` (Latin hypercube).
-            samples: Number of designs drawn by ``random``/``lhs``.
-            seed: Seed of ``random``/``lhs``.
-            first: Only the grid's first ``first`` points (a probe of a huge grid).
-
-        Returns:
-            A read-only float array; rows violating ``l3 > 0`` (with ``total``) are dropped.
+        ``method``: ``"grid"`` (cartesian product of the ranges, ``first``: only its first
+        points, a probe of a huge grid), ``"random"`` (uniform) or ``"lhs"`` (Latin hypercube),
+        ``samples`` designs from ``seed``. With ``total``, rows with ``l3 <= 0`` are dropped.
 
         Raises:
             ParameterError: Unknown method, ``samples < 1``, or invalid designs.
