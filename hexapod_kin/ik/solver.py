@@ -63,10 +63,9 @@ _PER_THREAD = 64
 
 @dataclass(frozen=True)
 class _Setup:
-    """Checked options as the compiled loop's arguments (the order of ``step.P_*`` / ``step.I_*``).
+    """Checked options as the loop's C-contiguous arguments (``step.P_*`` / ``step.I_*``).
 
-    Private C-contiguous arrays, the same types for one target and for many (one compiled
-    specialisation of :func:`~hexapod_kin.ik.step.lm_loop`).
+    The same types for one target and many: one compiled :func:`~hexapod_kin.ik.step.lm_loop`.
     """
 
     prep: Prepared

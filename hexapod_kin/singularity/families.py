@@ -124,12 +124,9 @@ class Families:
     key: str = ""
 
     def nearest(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """The nearest and second-nearest families of ``q`` (M, nq) and the distances to them.
+        """``(index, distance, second_index, second_distance)`` (M,) of ``q`` (M, nq).
 
-        Returns:
-            ``(index, distance, second_index, second_distance)``, each (M,); −1 / inf where
-            there is no (second) family.
-
+        The nearest and second-nearest families; −1 / inf where there is no (second) family.
         """
         m = q.shape[0]
         none = np.full(m, -1, dtype=np.int64), np.full(m, np.inf)
@@ -198,12 +195,8 @@ def _holds(fams: tuple[Family, ...], model: Any, rows: tuple[str, ...]) -> None:
 
     Every zero is singular (``σ_min ≤ 1e-7 σ_max`` at projections of three random
     configurations), and every sign change of a square ``det J`` along four random lines
-    (:func:`_singular_points`) lies within 1e-6 of a family.
-
-    Raises:
-        ValueError: A family where the model's ``J`` keeps its rank, or a singular
-            configuration of the model that no family explains (an edited entry).
-
+    (:func:`_singular_points`) lies within 1e-6 of a family; else ``ValueError`` (an edited
+    entry).
     """
     from .measure import measures
 
