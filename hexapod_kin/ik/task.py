@@ -158,16 +158,11 @@ def _fast(t: np.ndarray) -> tuple[Mode, np.ndarray, np.ndarray, float] | None:
 
 
 def build_task(target: Any, *, mask: Any = None, weights: Any = None) -> Task:
-    """Parse a target into a :class:`Task` (pure function).
+    """Parse a target into a :class:`Task` with read-only arrays (pure function).
 
-    Args:
-        target: A position (3,) [m]; position + yaw (4,) = (x, y, z, ψ [rad]); or a pose
-            ``baseMtarget`` (4, 4) — a homogeneous transform with a proper rotation.
-        mask: Optional 6 booleans selecting rows x y z wx wy wz.
-        weights: Optional 6 weights >= 0 (instead of ``mask``).
-
-    Returns:
-        The task (read-only arrays).
+    ``target``: a position (3,) [m]; position + yaw (4,) = (x, y, z, ψ [rad]); or a pose
+    ``baseMtarget`` (4, 4), a homogeneous transform with a proper rotation. ``mask`` (6
+    booleans) or ``weights`` (6 values >= 0) select the rows x y z wx wy wz.
 
     Raises:
         IKError: Wrong shape, non-finite values, a matrix that is not a rigid transform, or
