@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from .._fields import fields_dict
+from .._fields import fields_dict, read_only
 from .._numerics import wrap_angles
 from ..exceptions import IKError
 from ..model import Model
@@ -406,8 +406,7 @@ def analytic_batch(
         )
         if not exact:
             q, valid = finish_on_table(fam.chain, x, q, valid, tol_abs, fam.scale, limits)
-    q.setflags(write=False)
-    valid.setflags(write=False)
+    read_only(q, valid)
     return AnalyticBatch(q=q, valid=valid, family=fam.family)
 
 

@@ -12,6 +12,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from .._fields import read_only
 from ..exceptions import HexapodKinError, IKError
 
 __all__ = ["AXES", "TARGET_FACTOR", "Task", "build_task", "build_tasks", "check_within"]
@@ -113,12 +114,8 @@ def _weights(mask: Any, weights: Any, allowed: tuple[int, ...]) -> np.ndarray:
     return arr
 
 
-_POSE_WEIGHTS = np.ones(6)
-_POSE_WEIGHTS.setflags(write=False)
-
-
-_POSITION_WEIGHTS = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
-_POSITION_WEIGHTS.setflags(write=False)
+_POSE_WEIGHTS, _POSITION_WEIGHTS = np.ones(6), np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
+read_only(_POSE_WEIGHTS, _POSITION_WEIGHTS)
 _EYE1, _F64 = np.eye(4)[None], np.dtype(np.float64)
 
 
