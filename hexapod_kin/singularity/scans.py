@@ -231,12 +231,6 @@ def _joint_indices(model: Any, joints: Any) -> tuple[int, ...]:
     return tuple(out)
 
 
-def _moving(model: Any) -> list[int]:
-    """Joints that move the tip (a whole hexapod has 15 that do not move one foot)."""
-    moving = sorted({int(c) for c in model.arrays.col})
-    return moving if moving else list(range(model.nq))
-
-
 def default_q_fixed(
     model: Any, rows: Any = None, joints: Sequence[int] | None = None, seed: int = 7
 ) -> np.ndarray:
@@ -292,7 +286,8 @@ def default_joints(model: Any, rows: Any = None, count: int = 2) -> tuple[int, .
     names = selected_rows(mdl, rows)
 
     def build() -> tuple[int, ...]:
-        cands = _moving(mdl) if len(_moving(mdl)) >= count else list(range(mdl.nq))
+        moving = sorted({int(c) for c in mdl.arrays.col})  # a hexapod: 15 do not move one foot
+        cands = moving if len(moving) >= count else list(range(mdl.nq))
         base, score = mdl.random_q(32, seed=11), np.zeros(mdl.nq)
         floor = 1e-12 * max(reach(mdl), 1e-12)
         for j in cands:
