@@ -223,16 +223,11 @@ def _with_yaw(pars: np.ndarray, yaws: Any) -> np.ndarray:
 def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKResult:
     """Numerical IK of the tip: position, position + yaw, or a 6-D pose, for any chain.
 
-    Args:
-        model: A loaded model (:func:`hexapod_kin.load`) or anything ``load`` takes.
-        target: Tip position (3,) [m]; position + yaw (4,) (ψ [rad]: angle of the tool's x
-            axis in the base xy-plane); or a pose ``baseMtarget`` (4, 4).
-        q0: Start configuration (nq,). Default: the candidate of
-            :attr:`~hexapod_kin.ik.Prepared.near` whose tip pose is nearest the target, then
-            :func:`~hexapod_kin.ik.home`, then the seeded restarts.
-        **options: The fields of :class:`IKOptions` (``mask``, ``weights``, ``tol``,
-            ``rot_tol``, ``max_iter``, ``restarts``, ``within_limits``, ``posture``,
-            ``posture_gain``).
+    ``model``: a loaded model or anything :func:`hexapod_kin.load` takes. ``target``: tip
+    position (3,) [m]; position + yaw (4,) (ψ [rad]: the tool's x axis in the base xy-plane);
+    or a pose ``baseMtarget`` (4, 4). ``q0`` (nq,): default the candidate of
+    :attr:`~hexapod_kin.ik.Prepared.near` whose tip pose is nearest the target, then
+    :func:`~hexapod_kin.ik.home`, then the seeded restarts. ``options``: :class:`IKOptions`.
 
     Returns:
         An :class:`IKResult`: ``"unreachable"`` (every attempt ended at a local minimum of the
@@ -240,10 +235,8 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
         only outside the limits), ``"singular"`` or ``"not_converged"`` (iteration cap).
 
     Raises:
-        IKError: Non-finite or wrongly shaped target, a target beyond a hundred robot sizes
-            (:func:`~hexapod_kin.ik.check_within`), or bad mask/weights.
-        ConfigurationError: Bad ``q0`` or ``posture``.
-        ParameterError: Unknown or bad options.
+        IKError: Bad target (:func:`~hexapod_kin.ik.check_within`) or mask/weights.
+        ConfigurationError: Bad ``q0`` or ``posture``. ParameterError: Bad options.
 
     """
     mdl = model if isinstance(model, KinematicModel) else as_model(model)
@@ -400,10 +393,7 @@ def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -
     (:func:`solve`'s default start), one (nq,) start for all, or (N, nq); ``options`` as
     :func:`solve`'s, for all. Returns one :class:`IKResult` per target, :func:`solve`'s bits.
 
-    Raises:
-        IKError: Bad targets (as :func:`solve`). ConfigurationError: ``q0`` rows do not match.
-        ParameterError: Unknown or bad options.
-
+    Raises: as :func:`solve` (and ConfigurationError: ``q0`` rows do not match).
     """
     mdl, opts = as_model(model), IKOptions.of(options)
     t = np.asarray(targets, dtype=float)
@@ -484,14 +474,9 @@ def solve_chain(
     sample's solution), ``lower`` / ``upper`` (nq,) limits [rad]/[m], ``tol`` [m] on the
     position error, ``max_iter`` accepted steps per target.
 
-    Returns:
-        ``(q (N, nq), residual (N,) [m], converged (N,))``: the best configuration found,
-        its position error and whether it is within ``tol``.
-
-    Raises:
-        IKError: ``targets`` or ``seeds`` of the wrong shape or not finite.
-        ParameterError: ``tol`` or ``max_iter`` out of range.
-
+    Returns ``(q (N, nq), residual (N,) [m], converged (N,))``: the best configuration found,
+    its position error and whether it is within ``tol``. Raises IKError (``targets``/``seeds``
+    shape or values), ParameterError (``tol``, ``max_iter``).
     """
     n = int(chain.nq)
     fplan, iplan, par, w6 = _chain_setup(chain, lower, upper, tol, max_iter)
