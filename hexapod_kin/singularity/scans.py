@@ -84,6 +84,10 @@ def _ro(arr: np.ndarray) -> np.ndarray:
 class ScanResult:
     """Result of :func:`scan` (arrays are read-only).
 
+    Also: ``joint_names`` and ``prismatic`` flags of the n joints, ``joints`` (the scanned
+    ones' indices), ``rows`` of ``J``, the ``threshold`` used, ``q_fixed`` (n,) of the joints not
+    scanned and ``source`` (the model's name).
+
     Attributes:
         q: Configurations (N, n) in [rad] / [m].
         det: (N,), and ``manipulability``, ``condition``, ``sigma_min``: as in
@@ -99,14 +103,7 @@ class ScanResult:
         family_tol: Distance in [rad]/[m] within which a flagged sample counts as explained.
         family_tols: Per family, the tolerance used: ``family_tol`` widened to ``1.5 ×
             threshold / s`` (``s`` the family's measured lever arm), at most ``4 × family_tol``.
-        joint_names: Names of the n joints.
-        prismatic: (n,) True for prismatic joints.
-        joints: Indices of the scanned joints.
-        rows: Row names of ``J``.
-        threshold: The ``sigma_min`` threshold used.
         grid_shape: Points per scanned joint for a grid scan (``q`` in C order), else ``None``.
-        q_fixed: Values of the joints that were not scanned (n,).
-        source: The model's name.
 
     """
 
@@ -366,11 +363,13 @@ def scan(
 ) -> ScanResult:
     """Scan joint space (grid or random samples) for singularity measures and singular families.
 
+    ``model``: a loaded model or any source for :func:`hexapod_kin.load`; ``samples``: uniform
+    random configurations instead of a grid (``seed``: theirs); ``rtol``: ``threshold`` relative
+    to the reach; ``chunk``: configurations per kernel call (scans above :data:`SMALL_SCAN`).
+
     Args:
-        model: A loaded model or any source for :func:`hexapod_kin.load`.
         grid: Points per scanned joint (one count, or one per joint) over the joint limits;
             default :data:`DEFAULT_GRID`.
-        samples: Number of uniform random configurations (instead of a grid).
         joints: Joints to scan (names or indices, or ``"all"``); default
             :func:`default_joints`. The others stay at ``q_fixed``.
         rows: Row selection of ``J`` (``("x", "y", "z", "wz")``, ``"position"``, ``"all"``);
@@ -378,20 +377,15 @@ def scan(
         q_fixed: Values of the joints not scanned; default :func:`default_q_fixed`.
         threshold: ``sigma_min`` below which a configuration is flagged singular; default
             ``rtol × reach(model)``.
-        rtol: Relative threshold (see ``threshold``).
         family_tol: Joint-space distance in [rad]/[m] within which a flagged configuration
             counts as on its nearest family; default ``15 × rtol``.
         families: ``True``: derive them when needed (sympy, within ``family_budget``);
             ``"cached"``: only families already derived; ``False``: none.
         family_budget: CPU budget in [s] of the families (:func:`~.families.families_for`).
-        seed: Random seed for ``samples``.
         progress: Show a tqdm bar on stderr (default: when N > 2,000,000 and stderr is a tty).
-        chunk: Configurations per kernel call (scans above :data:`SMALL_SCAN`).
 
     Raises:
-        ParameterError: Bad ``grid``/``samples``, joints, rows, ``threshold``, ``families``
-            or ``chunk``.
-        ConfigurationError: Bad ``q_fixed``.
+        ParameterError: Bad arguments. ConfigurationError: Bad ``q_fixed`` or ``family_tol``.
 
     """
     mdl = as_model(model)
