@@ -120,10 +120,7 @@ class LegFamily:
 
         Targets (N, 3) in the chain's base frame; the exact pattern's workspace, joint limits
         ignored (planar reach ``‖(u, w)‖`` against ``[|l2 − l3|, l2 + l3]``, both hip branches).
-
-        Raises:
-            IKError: The family is ``scara`` (no such distance) or bad targets.
-
+        Raises IKError: the family is ``scara`` (no such distance) or bad targets.
         """
         if self.family == "scara":
             raise IKError("reach_excess: legs only (coxa_tibia, leg3)", parameter="family")

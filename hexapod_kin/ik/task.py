@@ -222,11 +222,7 @@ def build_tasks(targets: Any, *, mask: Any = None, weights: Any = None) -> list[
     """:func:`build_task` of each row of ``targets`` ((N, 3) positions or (N, 4, 4) poses).
 
     Without ``mask`` or ``weights`` the rows are checked at once; any other case, or a row that
-    fails, goes through :func:`build_task` one by one.
-
-    Raises:
-        IKError: As :func:`build_task`.
-
+    fails, goes through :func:`build_task` one by one. Raises IKError: as :func:`build_task`.
     """
     t = np.asarray(targets)
     if mask is None and weights is None and t.dtype == np.float64 and len(t):
@@ -268,10 +264,7 @@ def check_within(
 
     ``model``: a loaded :class:`hexapod_kin.model.Model`; the error names ``parameter`` and is
     of class ``kind`` (one of the package's).
-
-    Raises:
-        IKError: (or ``kind``) A position with ``|x|``, ``|y|`` or ``|z|`` over the limit.
-
+    Raises IKError: (or ``kind``) A position with ``|x|``, ``|y|`` or ``|z|`` over the limit.
     """
     if isinstance(positions, np.ndarray) and positions.shape == (3,):  # per call: ~1 µs
         total = sum(map(abs, positions.tolist()))  # ≥ the largest; NaN stays NaN

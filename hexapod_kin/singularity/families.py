@@ -363,9 +363,7 @@ def _numeric_families(
 ) -> None:
     """Check the derivation's ``|det|`` or ``|det(J Jᵀ)|`` (``kind``), ``sym`` at ``qs``, on J.
 
-    Raises:
-        ParameterError: No determinant derived, or they differ (other frames or rows).
-
+    Raises ParameterError: no determinant derived, or they differ (other frames or rows).
     """
     from .measure import measures
 
@@ -392,10 +390,7 @@ def families_for(
 
     ``derive``: derive them with sympy within ``budget`` (CPU [s]; a stopped run is kept with
     its budget, a larger one carries on) when not on disk yet; else the call never waits.
-
-    Raises:
-        ParameterError: ``budget`` not a finite value > 0.
-
+    Raises ParameterError: ``budget`` not a finite value > 0.
     """
     positive("budget", budget)
     chain, why = _table(model)

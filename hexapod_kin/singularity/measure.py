@@ -137,12 +137,7 @@ def measures(model: Any, q: Any, rows: str | Sequence[str] | None = None) -> Mea
     """Singularity measures of one configuration ``q`` (nq,) [rad]/[m] (Pinocchio J, numpy SVD).
 
     ``model``: a loaded model or a source; ``rows``: the row selection (default
-    :func:`default_rows`).
-
-    Raises:
-        ConfigurationError: Bad ``q``.
-        ParameterError: Bad ``rows``.
-
+    :func:`default_rows`). Raises ConfigurationError (bad ``q``), ParameterError (bad ``rows``).
     """
     mdl = as_model(model)
     names = selected_rows(mdl, rows)
@@ -162,11 +157,7 @@ def measures_batch(
 
     ``qs`` (N, nq) [rad]/[m]; ``model`` and ``rows`` as :func:`measures`. ``out``: optional four
     float64 (N,) arrays to fill (det, manipulability, condition, sigma_min), then the result's.
-
-    Raises:
-        ConfigurationError: ``qs`` has the wrong shape or non-finite values, or bad ``out``.
-        ParameterError: Bad ``rows``.
-
+    Raises ConfigurationError (bad ``qs`` or ``out``), ParameterError (bad ``rows``).
     """
     from ._plan import block_plan, compute, output_arrays
 

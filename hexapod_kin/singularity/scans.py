@@ -160,9 +160,7 @@ class ScanResult:
     def family_residual(self, q: Any, f: int) -> np.ndarray:
         """Signed residual of family ``f`` at ``q`` (…, n) (zero on the family).
 
-        Raises:
-            ParameterError: ``f`` is not the index of a family.
-
+        Raises ParameterError: ``f`` is not the index of a family.
         """
         if not 0 <= int(f) < len(self.families):
             raise ParameterError(
@@ -177,9 +175,7 @@ class ScanResult:
     def grid(self, name: str) -> np.ndarray:
         """A measure reshaped to :attr:`grid_shape` (grid scans only).
 
-        Raises:
-            ParameterError: Not a grid scan, or an unknown measure name.
-
+        Raises ParameterError: not a grid scan, or an unknown measure name.
         """
         if self.grid_shape is None:
             raise ParameterError("grid(): this scan used random samples, not a grid")
@@ -271,10 +267,7 @@ def default_joints(model: Any, rows: Any = None, count: int = 2) -> tuple[int, .
     Each joint that moves the tip is swept over its range at 32 seeded configurations of the
     others; its score is the mean spread of ``log σmin`` (ties: revolute, then later joints).
     ``rows`` as :func:`default_q_fixed`'s. Returns joint indices, ascending.
-
-    Raises:
-        ParameterError: The model has fewer than ``count`` joints.
-
+    Raises ParameterError: the model has fewer than ``count`` joints.
     """
     mdl = as_model(model)
     if mdl.nq < count:
@@ -363,13 +356,11 @@ def scan(
 ) -> ScanResult:
     """Scan joint space (grid or random samples) for singularity measures and singular families.
 
-    ``model``: a loaded model or any source for :func:`hexapod_kin.load`; ``samples``: uniform
-    random configurations instead of a grid (``seed``: theirs); ``rtol``: ``threshold`` relative
-    to the reach; ``chunk``: configurations per kernel call (scans above :data:`SMALL_SCAN`).
-
     Args:
+        model: A loaded model or any source for :func:`hexapod_kin.load`.
         grid: Points per scanned joint (one count, or one per joint) over the joint limits;
             default :data:`DEFAULT_GRID`.
+        samples: Uniform random configurations instead of a grid (``seed``: theirs).
         joints: Joints to scan (names or indices, or ``"all"``); default
             :func:`default_joints`. The others stay at ``q_fixed``.
         rows: Row selection of ``J`` (``("x", "y", "z", "wz")``, ``"position"``, ``"all"``);
@@ -377,12 +368,15 @@ def scan(
         q_fixed: Values of the joints not scanned; default :func:`default_q_fixed`.
         threshold: ``sigma_min`` below which a configuration is flagged singular; default
             ``rtol × reach(model)``.
+        rtol: Relative threshold (see ``threshold``).
         family_tol: Joint-space distance in [rad]/[m] within which a flagged configuration
             counts as on its nearest family; default ``15 × rtol``.
         families: ``True``: derive them when needed (sympy, within ``family_budget``);
             ``"cached"``: only families already derived; ``False``: none.
         family_budget: CPU budget in [s] of the families (:func:`~.families.families_for`).
         progress: Show a tqdm bar on stderr (default: when N > 2,000,000 and stderr is a tty).
+        chunk: Configurations per kernel call (scans above :data:`SMALL_SCAN`).
+        seed: Of ``samples``.
 
     Raises:
         ParameterError: Bad arguments. ConfigurationError: Bad ``q_fixed`` or ``family_tol``.

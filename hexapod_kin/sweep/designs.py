@@ -81,10 +81,7 @@ def parse_range(name: str, text: str, scale: float = 1.0) -> float | Range:
     """Parse ``VALUE``, ``A:B`` or ``A:B:N`` (CLI syntax) into a float or a :class:`Range`.
 
     ``name`` is the parameter named in errors; ``scale`` multiplies the values (π/180: degrees).
-
-    Raises:
-        ParameterError: Malformed text, with the expected syntax.
-
+    Raises ParameterError: malformed text, with the expected syntax.
     """
     parts = str(text).split(":")
     try:
@@ -157,10 +154,7 @@ class DesignSpace:
         ``method``: ``"grid"`` (cartesian product of the ranges, ``first``: only its first
         points, a probe of a huge grid), ``"random"`` (uniform) or ``"lhs"`` (Latin hypercube),
         ``samples`` designs from ``seed``. With ``total``, rows with ``l3 <= 0`` are dropped.
-
-        Raises:
-            ParameterError: Unknown method, ``samples < 1``, or invalid designs.
-
+        Raises ParameterError: unknown method, ``samples < 1``, or invalid designs.
         """
         one_of("method", method, METHODS)
         swept = self.swept
@@ -239,11 +233,7 @@ def design_chain(design: Any) -> Any:
     """The :func:`~hexapod_kin.robots.hexabot_leg` chain (hip frame, limits, no mount) of a design.
 
     ``design``: 13 values in the order of :data:`PARAMETERS`, or name → value (missing names
-    take :data:`DEFAULTS`).
-
-    Raises:
-        ParameterError: Bad lengths or limits.
-
+    take :data:`DEFAULTS`). Raises ParameterError: bad lengths or limits.
     """
     from ..params import JointLimits
     from ..robots import hexabot_leg

@@ -27,11 +27,7 @@ def pareto_front(table: Mapping[str, Any], objectives: Sequence[str] = OBJECTIVE
     """(N,) mask of the non-dominated feasible designs of a sweep table, ``objectives`` maximised.
 
     Dominated: another one at least as good in every objective, better in one; infeasible
-    designs are never on the front.
-
-    Raises:
-        ParameterError: An objective is not a column.
-
+    designs are never on the front. Raises ParameterError: an objective is not a column.
     """
     f = _columns(table, objectives)
     n = f.shape[0]
@@ -54,10 +50,7 @@ def best_index(table: Mapping[str, Any], key: Sequence[str] = OBJECTIVES) -> int
     """Row of the best feasible design (-1: none): max of ``key[0]``, ties broken by the next keys.
 
     Ties are values within 1e-9 (relative) of the maximum; ``table``: column name → (N,) array.
-
-    Raises:
-        ParameterError: A key is not a column.
-
+    Raises ParameterError: a key is not a column.
     """
     f = _columns(table, key)
     n = f.shape[0]

@@ -89,9 +89,7 @@ _MAX_TABLE_BYTES = 1 << 30
 def table_paths(out: str | Path) -> dict[str, Path]:
     """The table and chunks' sidecar: ``x.csv`` → ``{"csv": x.csv, "parts": .x.csv.sweep-parts}``.
 
-    Raises:
-        ParameterError: ``out`` has another extension.
-
+    Raises ParameterError: ``out`` has another extension.
     """
     p = Path(out)
     kind = TABLE_FORMATS.get(p.suffix.lower())
@@ -239,7 +237,7 @@ def sweep(
         space: The design space.
         method: ``"grid"``, ``"random"`` or ``"lhs"``.
         samples: Designs drawn by ``random``/``lhs``.
-        seed: Seed of the design sampling and of the Monte-Carlo volume samples.
+        seed: Of the design sampling and of the Monte-Carlo volume samples.
         mc_samples: Monte-Carlo points per design (volume).
         line_points: Grid steps per side of the stride search.
         stride_points: Points along the stride for the σ/singularity/limit minima.
@@ -248,7 +246,7 @@ def sweep(
         chunk_size: Designs per chunk (default: about 20 chunks, 10..250 designs each).
         workers: Local threads scoring chunks (default: one per core). Ignored on Dask.
         client: A ``distributed.Client`` to run the chunks on.
-        scheduler: Address of a Dask scheduler (``tcp://host:8786``) to connect to.
+        scheduler: Or the address of a Dask scheduler to connect to (``tcp://host:8786``).
         progress: Show a tqdm bar on stderr (None: when stderr is a terminal).
         on_chunk: Called with the chunk number after each chunk is scored (and written).
         allow_large: Run a sweep estimated beyond :data:`MAX_HOURS` or :data:`MAX_GB`.

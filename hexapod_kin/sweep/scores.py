@@ -197,13 +197,8 @@ def score_designs(
     The options are :func:`~hexapod_kin.sweep.sweep`'s (``seed``: of the common Monte-Carlo
     samples; ``line_points``: grid steps per side of the stride search, then bisection).
 
-    Returns:
-        Column name → (N,) float array, the names of :data:`SCORES` (each design's scores
-        depend only on its parameters and the seed).
-
-    Raises:
-        ParameterError: Bad shapes or option values.
-
+    Returns column name → (N,) float array, the names of :data:`SCORES` (each design's scores
+    depend only on its parameters and the seed). Raises ParameterError: bad shapes or options.
     """
     d = np.ascontiguousarray(np.asarray(designs, dtype=np.float64))
     if d.ndim != 2 or d.shape[1] != len(PARAMETERS):

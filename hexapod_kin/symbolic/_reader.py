@@ -53,9 +53,7 @@ class CacheFormatError(ValueError):
 def read_srepr(text: str) -> Any:
     """The sympy object of ``srepr`` ``text``, built without ``eval``.
 
-    Raises:
-        CacheFormatError: Text that is not a plain ``srepr`` of the allowed constructors.
-
+    Raises CacheFormatError: text that is not a plain ``srepr`` of the allowed constructors.
     """
     if not isinstance(text, str) or len(text) > MAX_CHARS:
         raise CacheFormatError("not a stored expression (not text, or too long)")

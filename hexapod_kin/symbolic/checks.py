@@ -34,10 +34,7 @@ def evaluate(expr: Any, values: Mapping[Any, Any]) -> Any:
 
     ``expr`` is built of numbers, symbols, ``+``, ``*``, powers and the functions ``sin cos tan
     exp log Abs atan2 asin acos atan``; the value is a float or an array of the broadcast shape.
-
-    Raises:
-        ValueError: A symbol without a value, or a function outside the list.
-
+    Raises ValueError: a symbol without a value, or a function outside the list.
     """
     return _value(sp.sympify(expr), values, {})
 

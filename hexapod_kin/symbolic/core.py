@@ -132,12 +132,8 @@ def _number(x: float) -> sp.Expr:
 def length_symbols(chain: Chain, names: Mapping[str, str] | None) -> dict[str, Any]:
     """One symbol per non-zero ``d``/``r`` entry (and tool offset); values and sources.
 
-    Returns:
-        ``{"per_row": [(d, r)], "values": {sym: m}, "sources": {sym: key}, "tool": [x, y, z]}``.
-
-    Raises:
-        ParameterError: ``names`` keys that are not lengths of the table, or reused names.
-
+    Returns ``{"per_row": [(d, r)], "values": {sym: m}, "sources": {sym: key}, "tool": [x, y,
+    z]}``. Raises ParameterError: ``names`` keys that are not lengths of the table, or reused.
     """
     entries = []
     for j, row in enumerate(chain.rows, start=1):

@@ -46,10 +46,10 @@ _GRAM_OPS = 300
 class Derivation:
     """Symbolic kinematics of one chain (all sympy objects; lengths symbolic).
 
+    ``chain`` is the chain it was derived from, ``q`` its joint symbols ``q1..qn`` (named
+    ``joint_names``), ``tip`` the tip frame's name, ``cached`` True when read from the disk cache.
+
     Attributes:
-        chain: The chain it was derived from.
-        q: The joint symbols ``q1..qn``.
-        joint_names: The chain's joint names, in the same order.
         lengths: Length symbol → value in [m] (what :meth:`numeric` substitutes).
         length_sources: Length symbol → the table entry it stands for (e.g. ``"d2"``).
         transforms: ``^{j-1}T_j`` for every table row (4×4 each).
@@ -65,13 +65,11 @@ class Derivation:
             finished).
         families: The singular families read off :attr:`det` (or :attr:`gram`).
         reference: Name of the frame whose axes ``p`` and ``J`` are expressed in (the base).
-        tip: Name of the tip frame.
         base_transform: ``T_base_0`` (4×4; identity without a base pose).
         tool_transform: ``T_n_tip`` (4×4; identity without a tool).
         method: How the determinant was computed (frame, wrist-centre split, Gram).
         incomplete: What could not be done, and why (empty when complete).
         seconds: CPU time of the derivation in [s] (0 when read from the cache).
-        cached: True when read from the disk cache.
         agree: Whether the direct and indirect position Jacobians are equal (``None``: not
             compared within the budget; :attr:`methods_agree` compares them).
         families_done: True when the determinant, the families and their checks were reached.
@@ -605,7 +603,6 @@ def cached(source: Any, rows: str | Sequence[str] | None = None) -> Derivation |
 
     Never runs sympy's derivation; ``source``, ``rows`` and the errors
     (:class:`~hexapod_kin.exceptions.ParameterError`) are those of :func:`derive`.
-
     """
     chain, reference, tip_name, syms, digest = _start(source, None, None, rows, None)
     stages = _MEMO.get(digest)
