@@ -30,11 +30,7 @@ def plot_sweep(
     front panel plots stride against volume, coloured by min σ_min. ``result``: a
     :class:`~hexapod_kin.sweep.run.SweepResult` (or its ``table``); ``params``: the maps' two
     parameters (default: the two most varied). Returns ``path``, the PNG written atomically.
-
-    Raises:
-        ParameterError: Unknown parameter names.
-        OptionalDependencyError: matplotlib missing.
-
+    Raises ParameterError: unknown parameter names; OptionalDependencyError: matplotlib missing.
     """
     from ..plots import pyplot, save_figure
 

@@ -50,13 +50,6 @@ _TWO_PI = 2.0 * math.pi
 _BLOCK = 1 << 18  # targets per closed-form call (bounds the temporary arrays)
 
 
-def _solve(d: np.ndarray, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Within-limits solutions (N, 4, 3) and validity (N, 4) of points (N, 3), designs (N, 13)."""
-    return leg_solutions(
-        pts, (d[:, 0], d[:, 1], d[:, 2]), sign=-1.0, limits=(d[:, 6:12:2], d[:, 7:12:2])
-    )
-
-
 def _member(d: np.ndarray, pts: np.ndarray) -> np.ndarray:
     """(N,) True where point i is reachable within the limits by design row i."""
     out = np.empty(len(pts), dtype=bool)
@@ -153,7 +146,10 @@ def _score(d: np.ndarray, unit: np.ndarray, line: int, points: int, use: float) 
     step = 2.0 * half[:, None] * k / (points - 1) if points > 1 else half[:, None]
     ts = centre[:, None] - half[:, None] + step  # (n, points)
     pts = p0[:, None, :] + ts[..., None] * direction[:, None, :]
-    q, valid = _solve(np.repeat(d, points, axis=0), pts.reshape(-1, 3))
+    dr = np.repeat(d, points, axis=0)  # within-limits solutions (N, 4, 3), validity (N, 4)
+    lo, hi = dr[:, 6:12:2], dr[:, 7:12:2]
+    q, valid = leg_solutions(pts.reshape(-1, 3), (dr[:, 0], dr[:, 1], dr[:, 2]), sign=-1.0,
+                             limits=(lo, hi))  # fmt: skip
     rep = (np.repeat(v, points)[:, None] for v in (l1, l2, l3))
     sv, mv, rho = _sigma_rows(q[..., 1], q[..., 2], *rep)
     sv = np.where(valid, sv, -1.0)
@@ -162,8 +158,6 @@ def _score(d: np.ndarray, unit: np.ndarray, line: int, points: int, use: float) 
     qb = q[rows, best]
     aq3 = np.abs(qb[:, 2]) % _TWO_PI
     aq3 = np.minimum(aq3, _TWO_PI - aq3)
-    lo = np.repeat(d[:, 6:12:2], points, axis=0)
-    hi = np.repeat(d[:, 7:12:2], points, axis=0)
     cols = {
         "sigma_min": sv[rows, best],
         "manipulability": mv[rows, best],

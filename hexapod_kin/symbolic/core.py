@@ -98,16 +98,6 @@ def product(a: sp.Matrix, b: sp.Matrix) -> sp.Matrix:
     return sp.Matrix(a.rows, b.cols, entry)
 
 
-def affine(t: sp.Matrix, v: sp.Matrix) -> sp.Matrix:
-    """``R v + o`` for the homogeneous transform ``t`` = [R o; 0 1] and a 3-vector ``v``."""
-    return product(t[:3, :], sp.Matrix([*v, 1]))
-
-
-def z_cross(rot: sp.Matrix, v: sp.Matrix) -> sp.Matrix:
-    """``R (z × v)`` = ``R[:, 1] v_x − R[:, 0] v_y`` (a revolute column of the Jacobian)."""
-    return product(rot[:, :2], sp.Matrix([sp.Mul(-1, v[1], evaluate=False), v[0]]))
-
-
 def _rotation(rot: np.ndarray) -> sp.Matrix:
     """A numeric rotation as sympy, exact when its roll-pitch-yaw are nice angles."""
     from ..params import matrix_to_rpy
@@ -220,27 +210,28 @@ def kinematics(
         tip_in[j] = vec
         if j > 0:
             t = transforms[j]
-            vec = cheap_(t[:3, :3] * vec + t[:3, 3]) if simplify else affine(t, vec)
+            if simplify:
+                vec = cheap_(t[:3, :3] * vec + t[:3, 3])
+            else:  # R v + o, unevaluated
+                vec = product(t[:3, :], sp.Matrix([*vec, 1]))
     cols = []
     for j in chain.joint_rows:
         rot = cumulative[j][:3, :3]
         if chain.rows[j].sigma == "revolute":
             v = tip_in[j]
-            lin = cheap_(rot[:, 1] * v[0] - rot[:, 0] * v[1]) if simplify else z_cross(rot, v)
+            if simplify:  # R (z × v) = R[:, 1] v_x − R[:, 0] v_y
+                lin = cheap_(rot[:, 1] * v[0] - rot[:, 0] * v[1])
+            else:
+                lin = product(rot[:, :2], sp.Matrix([sp.Mul(-1, v[1], evaluate=False), v[0]]))
             cols.append(sp.Matrix.vstack(lin, rot[:, 2]))
         else:
             cols.append(sp.Matrix.vstack(rot[:, 2], sp.zeros(3, 1)))
     jd = sp.Matrix.hstack(*cols)
     # without simplification (the fallback) no derivative: the direct one's linear rows
     ji = _indirect(p, q, chain.sigmas) if simplify else jd[:3, :]
-    out = {"transforms": tuple(transforms), "base": base_t, "tool": tool_t}
-    return out | {
-        "cumulative": tuple(cumulative),
-        "tip": tip,
-        "p": p,
-        "J_direct": jd,
-        "J_indirect": ji,
-    }
+    return {"transforms": tuple(transforms), "base": base_t, "tool": tool_t,
+            "cumulative": tuple(cumulative), "tip": tip, "p": p, "J_direct": jd,
+            "J_indirect": ji}  # fmt: skip
 
 
 def _indirect(p: sp.Matrix, q: Sequence[sp.Symbol], sigmas: Sequence[str]) -> sp.Matrix:
