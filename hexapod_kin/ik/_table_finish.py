@@ -54,21 +54,12 @@ def finish_on_table(
     ch: Chain, x: np.ndarray, q: np.ndarray, valid: np.ndarray, tol_abs: float, scale: float,
     limits: tuple[np.ndarray, np.ndarray] | None,
 ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """Finish leg solutions on the table's own kinematics (the one loop, no limits).
+    """Finish the ``valid`` (N, K) slots of ``q`` (N, K, n) on the table itself (no limits).
 
-    Args:
-        ch: The leg's chain (its joint rows first; α1 and d1 are taken as in the mount).
-        x: (N, 3) targets [m] in the mount frame.
-        q: (N, K, n) starting solutions (the exact pattern's closed form; NaN = none).
-        valid: (N, K) the slots to finish.
-        tol_abs: A slot stays valid when its foot ends within this distance [m] of the
-            target (2 DOF: the target's distance to the table's surface, Gauss–Newton).
-        scale: The chain's length scale [m] (the loop stops at ``‖e‖ ≤ 1e-15 · scale``).
-        limits: Optional (lower, upper) (n,): slots outside (after ±2π shifts) are invalid.
-
-    Returns:
-        ``(q, valid)`` as :func:`~hexapod_kin.ik.leg_solutions` returns them.
-
+    ``x``: (N, 3) targets [m] in the mount frame. A slot stays valid when its foot ends within
+    ``tol_abs`` [m] of the target (2 DOF: the distance to the table's surface) and, with
+    ``limits`` (lower, upper), inside them after ±2π shifts; the loop stops at ``‖e‖ ≤ 1e-15 ·
+    scale``. Returns ``(q, valid)`` as :func:`~hexapod_kin.ik.leg_solutions` does.
     """
     n_t, k, n = q.shape
     q, idx = q.copy(), np.argwhere(valid)

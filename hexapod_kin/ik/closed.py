@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from .._fields import fields_dict
+from .._fields import fields_dict, read_only
 from .._numerics import wrap_angles
 from ..exceptions import IKError
 from ..model import Model
@@ -72,8 +72,7 @@ class LegFamily:
     """A chain recognised as one of the closed-form families (see the module docstring).
 
     Attributes:
-        family: ``"coxa_tibia"``, ``"leg3"`` or ``"scara"``.
-        chain: The chain.
+        family: ``"coxa_tibia"``, ``"leg3"`` or ``"scara"`` (of ``chain``).
         lengths: The family's lengths in [m]: ``(l1, l2)``, ``(l1, l2, l3)`` or ``(d2, d3)``
             (a leg's last one to its foot point, ``√(p_x² + p_y²)``).
         height: Height of the first horizontal plane ``r1`` (SCARA: ``r1 + r2 + r3``) in [m].
@@ -121,10 +120,7 @@ class LegFamily:
 
         Targets (N, 3) in the chain's base frame; the exact pattern's workspace, joint limits
         ignored (planar reach ``‖(u, w)‖`` against ``[|l2 − l3|, l2 + l3]``, both hip branches).
-
-        Raises:
-            IKError: The family is ``scara`` (no such distance) or bad targets.
-
+        Raises IKError: the family is ``scara`` (no such distance) or bad targets.
         """
         if self.family == "scara":
             raise IKError("reach_excess: legs only (coxa_tibia, leg3)", parameter="family")
@@ -192,13 +188,9 @@ def _chain_of(chain: Chain | Model | str) -> Chain:
 def detect_family(chain: Chain | Model | str, *, angle_tol: float = FAMILY_TOL) -> LegFamily:
     """Recognise the closed-form family of a chain from its table pattern.
 
-    Args:
-        chain: A :class:`~hexapod_kin.params.Chain`, a model loaded from one, or any source
-            :func:`hexapod_kin.load` takes (a preset name, a table file).
-        angle_tol: How far [rad] a leg's twists may be from the exact pattern.
-
-    Raises:
-        IKError: The table matches no family, or the model has no table.
+    ``chain``: a :class:`~hexapod_kin.params.Chain`, a model loaded from one, or any source
+    :func:`hexapod_kin.load` takes; ``angle_tol`` [rad]: how far a leg's twists may be from the
+    exact pattern. Raises IKError: the table matches no family, or the model has no table.
 
     """
     ch = _chain_of(chain)
@@ -294,8 +286,7 @@ class AnalyticBatch:
     Attributes:
         q: (N, K, n) joint values, NaN where not ``valid``; K is 2 (coxa_tibia, scara) or 4
             (leg3), slots of fixed branch meaning (see :func:`analytic_batch`).
-        valid: (N, K) True where the slot holds a solution.
-        family: The detected family name.
+        valid: (N, K) True where the slot holds a solution (``family``: the detected one).
 
     """
 
@@ -360,18 +351,11 @@ def analytic_batch(
     ``[toward/ankle +, toward/ankle −, reversed/ankle +, reversed/ankle −]``; scara
     ``[elbow +, elbow −]``; coincident branches both stay valid. A leg off the pattern is
     finished on the table (:mod:`hexapod_kin.ik._table_finish`): a slot stays valid when its
-    foot lands within ``tol`` × the length scale of the target.
-
-    Args:
-        chain: A :class:`~hexapod_kin.params.Chain`, a model loaded from one, or any source
-            :func:`hexapod_kin.load` takes (a preset name, a table file).
-        targets: (N, 3) foot positions in [m] in the base frame (SCARA: or (N, 4) with yaw
-            [rad]); a single (3,) target is N = 1.
-        tol: Relative tolerance (× the chain's length scale) of the reachability tests.
-        within_limits: If True, invalidate solutions outside the joint limits (after ±2π).
-
-    Raises:
-        IKError: No closed form for this chain; bad or non-finite targets.
+    foot lands within ``tol`` × the length scale of the target. ``chain`` as
+    :func:`detect_family`; ``targets`` (N, 3) foot positions [m] in the base frame (SCARA: or
+    (N, 4) with yaw [rad]; a (3,) target is N = 1); ``tol`` relative (× the chain's length
+    scale) for the reachability tests; ``within_limits``: invalidate solutions outside the joint
+    limits (after ±2π). Raises IKError: no closed form for this chain; bad or non-finite targets.
 
     """
     fam = detect_family(chain)
@@ -406,8 +390,7 @@ def analytic_batch(
         )
         if not exact:
             q, valid = finish_on_table(fam.chain, x, q, valid, tol_abs, fam.scale, limits)
-    q.setflags(write=False)
-    valid.setflags(write=False)
+    read_only(q, valid)
     return AnalyticBatch(q=q, valid=valid, family=fam.family)
 
 
@@ -438,8 +421,9 @@ def _ik_scara(fam: LegFamily, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _leg_slots(
-    targets: Any, lengths: tuple[Any, ...], height: float, sign: float, offsets: Any, tol: float,
-    limits: tuple[Any, Any] | None, lateral: Any = 0.0, joint_signs: Any = None,
+    targets: Any, lengths: tuple[Any, ...], *, height: float = 0.0, sign: float = -1.0,
+    offsets: Any = None, tol: float = 0.0, limits: tuple[Any, Any] | None = None,
+    lateral: Any = 0.0, joint_signs: Any = None,
 ) -> tuple[np.ndarray | None, list[np.ndarray], list[np.ndarray]]:  # fmt: skip
     """The leg closed form as columns on the targets a branch reaches.
 
@@ -484,13 +468,8 @@ def _leg_slots(
     def take(a: Any) -> Any:
         return a if full or np.ndim(a) == 0 else a[..., sub]
 
-    x, h, w, us, reach = (
-        x[sub] if not full else x,
-        take(h),
-        take(w),
-        [take(u) for u in us],
-        [take(r) for r in reach],
-    )
+    x, h, w = (x if full else x[sub]), take(h), take(w)
+    us, reach = [take(u) for u in us], [take(r) for r in reach]
     l1, l2, l3 = take(np.asarray(l1)), take(np.asarray(l2)), take(np.asarray(l3))
     if side:
         e = take(np.asarray(e, dtype=np.float64))
@@ -547,28 +526,19 @@ def leg_solutions(
     ``c3 = (u² + w² − l2² − l3²)/(2 l2 l3)`` valid when ``|c3| ≤ 1 + ε`` (ε: ``tol`` as a
     cosine), ``φ3 = ±acos c3``, ``φ2 = atan2(w, u) − atan2(l3 s3, l2 + l3 c3)``.
 
-    Args:
-        targets: (N, 3) foot positions [m] in the leg's frame 0.
-        lengths: ``(l1, l2)`` or ``(l1, l2, l3)`` [m]; each a number or (N,) (one per target).
-        height: ``r1`` [m].
-        sign: ``sin α2`` (±1).
-        offsets: The joints' θ offsets [rad] (removed from the result); default 0.
-        tol: Absolute reachability tolerance [m].
-        limits: Optional (lower, upper) joint limits, each (n,) or (N, n): solutions outside
-            (after ±2π shifts) are invalid.
-        lateral: The foot's offset ``e`` [m] along the knee axis (a number or (N,)): then
-            ``u = ±√(x² + y² − e²) − l1``, ``φ1 = atan2(y, x) − atan2(−σe, u + l1)``.
-        joint_signs: ±1 per joint (−1: enters the planar leg negated). Default all +1.
-
-    Returns:
-        ``(q, valid)``: (N, K, n) joint values (NaN where invalid) and (N, K) validity, the
-        slots of :func:`analytic_batch`.
+    ``targets`` (N, 3) [m] in the leg's frame 0; ``lengths`` [m], each a number or (N,);
+    ``height`` ``r1`` [m]; ``offsets`` θ [rad] removed from the result; ``tol`` absolute [m];
+    ``limits`` (lower, upper), each (n,) or (N, n): solutions outside (after ±2π) are invalid;
+    ``lateral`` the foot's offset ``e`` [m] along the knee axis (number or (N,)): then
+    ``u = ±√(x² + y² − e²) − l1``, ``φ1 = atan2(y, x) − atan2(−σe, u + l1)``; ``joint_signs``
+    ±1 per joint (−1: enters the planar leg negated). Returns ``(q, valid)``: (N, K, n) joint
+    values (NaN where invalid) and (N, K) validity, the slots of :func:`analytic_batch`.
 
     """
     n = len(np.asarray(targets).reshape(-1, 3))
-    sub, cols, oks = _leg_slots(
-        targets, lengths, height, sign, offsets, tol, limits, lateral, joint_signs
-    )
+    sub, cols, oks = _leg_slots(targets, lengths, height=height, sign=sign, offsets=offsets,
+                                tol=tol, limits=limits, lateral=lateral,
+                                joint_signs=joint_signs)  # fmt: skip
     nq, k = len(lengths), 2 * len(lengths) - 2  # 2 slots (2 DOF) or 4 (3 DOF)
     q = np.full((k * nq, n), np.nan)  # slot-major rows, one column per target
     valid = np.zeros((k, n), dtype=bool)
@@ -580,22 +550,9 @@ def leg_solutions(
     return q.T.reshape(n, k, nq), valid.T
 
 
-def leg_reachable(
-    targets: Any,
-    lengths: tuple[Any, ...],
-    *,
-    height: float = 0.0,
-    sign: float = -1.0,
-    offsets: Any = None,
-    tol: float = 0.0,
-    limits: tuple[Any, Any] | None = None,
-    lateral: Any = 0.0,
-    joint_signs: Any = None,
-) -> np.ndarray:
-    """(N,) True where :func:`leg_solutions` has a valid slot (same arguments)."""
-    sub, _, oks = _leg_slots(
-        targets, lengths, height, sign, offsets, tol, limits, lateral, joint_signs
-    )
+def leg_reachable(targets: Any, lengths: tuple[Any, ...], **options: Any) -> np.ndarray:
+    """(N,) True where :func:`leg_solutions` has a valid slot (its arguments and keywords)."""
+    sub, _, oks = _leg_slots(targets, lengths, **options)
     if sub is None:
         return np.logical_or.reduce(oks)
     out = np.zeros(len(np.asarray(targets).reshape(-1, 3)), dtype=bool)

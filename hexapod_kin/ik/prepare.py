@@ -120,13 +120,7 @@ def home(model: ModelLike) -> np.ndarray:
 
     ``LEG_HOME`` for 3-joint chains inside its limits; otherwise the most dexterous (largest
     3rd singular value of the position Jacobian) of the ranges' middle and 256 seeded samples
-    in the middle half of each range (clipped to ±π). Computed once per model.
-
-    Args:
-        model: A loaded model or anything :func:`hexapod_kin.load` takes.
-
-    Returns:
-        (nq,) joint values in [rad]/[m] (a copy).
-
+    in the middle half of each range (clipped to ±π). Computed once per model; returns a copy,
+    (nq,) [rad]/[m]. ``model``: a loaded model or anything :func:`hexapod_kin.load` takes.
     """
     return np.array(prepared(model).home)

@@ -39,6 +39,8 @@ def _bad(name: str, value: Any, allowed: str) -> ParameterError:
 class IKOptions:
     """The options of :func:`~hexapod_kin.ik.solve` and its batch, checked on construction.
 
+    A value out of its range raises ParameterError.
+
     Attributes:
         mask: Optional 6 booleans for rows x y z wx wy wz (e.g. ``[1, 1, 1, 0, 0, 1]``).
         weights: Optional 6 weights >= 0 for those rows (instead of ``mask``).
@@ -49,9 +51,6 @@ class IKOptions:
         within_limits: Clamp limited joints to their bounds (continuous joints always wrap).
         posture: Secondary task of redundant chains: ``"middle"``, a configuration, or None.
         posture_gain: Fraction of the distance to ``posture`` tried per step (0 < g ≤ 1).
-
-    Raises:
-        ParameterError: A value out of its range.
 
     """
 

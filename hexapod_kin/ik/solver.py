@@ -63,10 +63,9 @@ _PER_THREAD = 64
 
 @dataclass(frozen=True)
 class _Setup:
-    """Checked options as the compiled loop's arguments (the order of ``step.P_*`` / ``step.I_*``).
+    """Checked options as the loop's C-contiguous arguments (``step.P_*`` / ``step.I_*``).
 
-    Private C-contiguous arrays, the same types for one target and for many (one compiled
-    specialisation of :func:`~hexapod_kin.ik.step.lm_loop`).
+    The same types for one target and many: one compiled :func:`~hexapod_kin.ik.step.lm_loop`.
     """
 
     prep: Prepared
@@ -224,16 +223,11 @@ def _with_yaw(pars: np.ndarray, yaws: Any) -> np.ndarray:
 def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKResult:
     """Numerical IK of the tip: position, position + yaw, or a 6-D pose, for any chain.
 
-    Args:
-        model: A loaded model (:func:`hexapod_kin.load`) or anything ``load`` takes.
-        target: Tip position (3,) [m]; position + yaw (4,) (ψ [rad]: angle of the tool's x
-            axis in the base xy-plane); or a pose ``baseMtarget`` (4, 4).
-        q0: Start configuration (nq,). Default: the candidate of
-            :attr:`~hexapod_kin.ik.Prepared.near` whose tip pose is nearest the target, then
-            :func:`~hexapod_kin.ik.home`, then the seeded restarts.
-        **options: The fields of :class:`IKOptions` (``mask``, ``weights``, ``tol``,
-            ``rot_tol``, ``max_iter``, ``restarts``, ``within_limits``, ``posture``,
-            ``posture_gain``).
+    ``model``: a loaded model or anything :func:`hexapod_kin.load` takes. ``target``: tip
+    position (3,) [m]; position + yaw (4,) (ψ [rad]: the tool's x axis in the base xy-plane);
+    or a pose ``baseMtarget`` (4, 4). ``q0`` (nq,): default the candidate of
+    :attr:`~hexapod_kin.ik.Prepared.near` whose tip pose is nearest the target, then
+    :func:`~hexapod_kin.ik.home`, then the seeded restarts. ``options``: :class:`IKOptions`.
 
     Returns:
         An :class:`IKResult`: ``"unreachable"`` (every attempt ended at a local minimum of the
@@ -241,10 +235,8 @@ def solve(model: ModelLike, target: Any, q0: Any = None, **options: Any) -> IKRe
         only outside the limits), ``"singular"`` or ``"not_converged"`` (iteration cap).
 
     Raises:
-        IKError: Non-finite or wrongly shaped target, a target beyond a hundred robot sizes
-            (:func:`~hexapod_kin.ik.check_within`), or bad mask/weights.
-        ConfigurationError: Bad ``q0`` or ``posture``.
-        ParameterError: Unknown or bad options.
+        IKError: Bad target (:func:`~hexapod_kin.ik.check_within`) or mask/weights.
+        ConfigurationError: Bad ``q0`` or ``posture``. ParameterError: Bad options.
 
     """
     mdl = model if isinstance(model, KinematicModel) else as_model(model)
@@ -397,20 +389,11 @@ def _is_local_min(
 def solve_many(model: ModelLike, targets: Any, q0: Any = None, **options: Any) -> list[IKResult]:
     """:func:`solve` for N targets of one kind, the loops in one compiled call (a batch API).
 
-    Args:
-        model: A loaded model or anything :func:`hexapod_kin.load` takes.
-        targets: (N, 3) positions, (N, 4) positions + yaw, or (N, 4, 4) poses.
-        q0: None (the default start of :func:`solve`), one start (nq,) for all, or (N, nq)
-            starts.
-        **options: As in :func:`solve` (one set for all targets).
+    ``targets``: (N, 3) positions, (N, 4) positions + yaw, or (N, 4, 4) poses; ``q0``: None
+    (:func:`solve`'s default start), one (nq,) start for all, or (N, nq); ``options`` as
+    :func:`solve`'s, for all. Returns one :class:`IKResult` per target, :func:`solve`'s bits.
 
-    Returns:
-        One :class:`IKResult` per target, the same bits as :func:`solve` of that target.
-
-    Raises:
-        IKError: Bad targets (as :func:`solve`). ConfigurationError: ``q0`` rows do not match.
-        ParameterError: Unknown or bad options.
-
+    Raises: as :func:`solve` (and ConfigurationError: ``q0`` rows do not match).
     """
     mdl, opts = as_model(model), IKOptions.of(options)
     t = np.asarray(targets, dtype=float)
@@ -487,23 +470,13 @@ def solve_chain(
     On a :class:`~hexapod_kin._chain.ChainArrays` (a leg: mount → foot), position rows only,
     no restarts, no posture; limited joints are clamped, continuous ones wrap.
 
-    Args:
-        chain: The chain's placements, axes and tip (its frame: the targets' frame).
-        targets: (N, 3) tip positions [m].
-        seeds: (N, nq) start configurations (e.g. the previous sample's solution).
-        lower: (nq,) lower joint limits [rad]/[m].
-        upper: (nq,) upper joint limits.
-        tol: Convergence threshold on the position error [m].
-        max_iter: Accepted steps per target.
+    ``targets`` (N, 3) [m] in the chain's frame, ``seeds`` (N, nq) starts (e.g. the previous
+    sample's solution), ``lower`` / ``upper`` (nq,) limits [rad]/[m], ``tol`` [m] on the
+    position error, ``max_iter`` accepted steps per target.
 
-    Returns:
-        ``(q (N, nq), residual (N,) [m], converged (N,))``: the best configuration found,
-        its position error and whether it is within ``tol``.
-
-    Raises:
-        IKError: ``targets`` or ``seeds`` of the wrong shape or not finite.
-        ParameterError: ``tol`` or ``max_iter`` out of range.
-
+    Returns ``(q (N, nq), residual (N,) [m], converged (N,))``: the best configuration found,
+    its position error and whether it is within ``tol``. Raises IKError (``targets``/``seeds``
+    shape or values), ParameterError (``tol``, ``max_iter``).
     """
     n = int(chain.nq)
     fplan, iplan, par, w6 = _chain_setup(chain, lower, upper, tol, max_iter)

@@ -79,21 +79,11 @@ def task_into(
 ) -> tuple[int, float, float]:  # pragma: no cover - compiled  # fmt: skip
     """Weighted task rows at one configuration (the problem, built from FK and J).
 
-    Args:
-        mode: 0 position, 1 position + yaw, 2 pose.
-        tgt: Target pose (4, 4) (rotation used in mode 2).
-        w6: Weights of the rows x y z wx wy wz (mode 1: ``w6[5]`` weights the yaw row).
-        yaw: Target yaw [rad] (mode 1).
-        p: Tip position (3,) in [m].
-        r: Tip rotation (3, 3) (unused in mode 0).
-        jac: LOCAL_WORLD_ALIGNED Jacobian (6, n).
-        work3: (3, 3) scratch.
-        e_out: (6,) output, the weighted errors (the first ``m`` rows are written).
-        j_out: (6, n) output, the weighted Jacobian rows.
-
-    Returns:
-        ``(m, ‖e_position‖², ‖e_rotation‖²)`` (unweighted squared errors of the kept rows).
-
+    ``mode`` (module doc), target pose ``tgt`` (4, 4; rotation used in mode 2) and ``yaw``
+    [rad] (mode 1), row weights ``w6`` (x y z wx wy wz; mode 1: ``w6[5]`` weights the yaw row),
+    tip ``p`` (3,) [m] and ``r`` (3, 3), LOCAL_WORLD_ALIGNED ``jac`` (6, n), ``work3`` (3, 3)
+    scratch. Writes the first ``m`` weighted errors into ``e_out`` (6,) and rows into ``j_out``
+    (6, n); returns ``(m, ‖e_position‖², ‖e_rotation‖²)`` (unweighted, kept rows).
     """
     n = jac.shape[1]
     m = 0

@@ -12,6 +12,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from .._fields import read_only
 from ..exceptions import HexapodKinError, IKError
 
 __all__ = ["AXES", "TARGET_FACTOR", "Task", "build_task", "build_tasks", "check_within"]
@@ -113,12 +114,8 @@ def _weights(mask: Any, weights: Any, allowed: tuple[int, ...]) -> np.ndarray:
     return arr
 
 
-_POSE_WEIGHTS = np.ones(6)
-_POSE_WEIGHTS.setflags(write=False)
-
-
-_POSITION_WEIGHTS = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
-_POSITION_WEIGHTS.setflags(write=False)
+_POSE_WEIGHTS, _POSITION_WEIGHTS = np.ones(6), np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
+read_only(_POSE_WEIGHTS, _POSITION_WEIGHTS)
 _EYE1, _F64 = np.eye(4)[None], np.dtype(np.float64)
 
 
@@ -158,16 +155,11 @@ def _fast(t: np.ndarray) -> tuple[Mode, np.ndarray, np.ndarray, float] | None:
 
 
 def build_task(target: Any, *, mask: Any = None, weights: Any = None) -> Task:
-    """Parse a target into a :class:`Task` (pure function).
+    """Parse a target into a :class:`Task` with read-only arrays (pure function).
 
-    Args:
-        target: A position (3,) [m]; position + yaw (4,) = (x, y, z, ψ [rad]); or a pose
-            ``baseMtarget`` (4, 4) — a homogeneous transform with a proper rotation.
-        mask: Optional 6 booleans selecting rows x y z wx wy wz.
-        weights: Optional 6 weights >= 0 (instead of ``mask``).
-
-    Returns:
-        The task (read-only arrays).
+    ``target``: a position (3,) [m]; position + yaw (4,) = (x, y, z, ψ [rad]); or a pose
+    ``baseMtarget`` (4, 4), a homogeneous transform with a proper rotation. ``mask`` (6
+    booleans) or ``weights`` (6 values >= 0) select the rows x y z wx wy wz.
 
     Raises:
         IKError: Wrong shape, non-finite values, a matrix that is not a rigid transform, or
@@ -230,11 +222,7 @@ def build_tasks(targets: Any, *, mask: Any = None, weights: Any = None) -> list[
     """:func:`build_task` of each row of ``targets`` ((N, 3) positions or (N, 4, 4) poses).
 
     Without ``mask`` or ``weights`` the rows are checked at once; any other case, or a row that
-    fails, goes through :func:`build_task` one by one.
-
-    Raises:
-        IKError: As :func:`build_task`.
-
+    fails, goes through :func:`build_task` one by one. Raises IKError: as :func:`build_task`.
     """
     t = np.asarray(targets)
     if mask is None and weights is None and t.dtype == np.float64 and len(t):
@@ -272,17 +260,11 @@ def _limit(model: Any) -> float:
 def check_within(
     model: Any, positions: Any, parameter: str = "target", kind: type[HexapodKinError] = IKError
 ) -> None:
-    """Refuse target positions beyond :data:`TARGET_FACTOR` × the robot's size, at once.
+    """Refuse (3,) or (N, 3) ``positions`` [m] beyond :data:`TARGET_FACTOR` × the robot's size.
 
-    Args:
-        model: A loaded model (``cached`` and ``model``: :class:`hexapod_kin.model.Model`).
-        positions: (3,) or (N, 3) positions [m] in the base frame.
-        parameter: The name of the argument in the error.
-        kind: The error's class (one of the package's).
-
-    Raises:
-        IKError: (or ``kind``) A position with ``|x|``, ``|y|`` or ``|z|`` over the limit.
-
+    ``model``: a loaded :class:`hexapod_kin.model.Model`; the error names ``parameter`` and is
+    of class ``kind`` (one of the package's).
+    Raises IKError: (or ``kind``) A position with ``|x|``, ``|y|`` or ``|z|`` over the limit.
     """
     if isinstance(positions, np.ndarray) and positions.shape == (3,):  # per call: ~1 µs
         total = sum(map(abs, positions.tolist()))  # ≥ the largest; NaN stays NaN

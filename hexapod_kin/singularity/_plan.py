@@ -65,16 +65,13 @@ def block_plan(k: int, n: int) -> tuple[bool, np.ndarray, np.ndarray, np.ndarray
 
 @dataclass(frozen=True)
 class GramPlan:
-    """How :func:`_reduce_block` treats one chain and row selection (see :func:`_gram_plan`).
+    """How the kernel's ``_reduce_block`` treats one chain and row selection (:func:`gram_plan`).
 
-    Attributes:
-        use_block: Whether the block path applies (``m = min(k, n) ≤ 6``, few minors).
-        gram_t: ``G = Jᵀ J`` (else ``J Jᵀ``).
-        perm: (m,) indices of ``G`` ordered by diagonal block.
-        csize: (c,) sizes of the diagonal blocks (one block of size m: no split).
-        drop: Packed positions of the entries between blocks (zero at random samples).
-        arrays: The tuple the kernel takes: ``(pack, rsub, csub, gram_t, perm, csize, drop)``.
-
+    ``use_block``: the block path applies (``m = min(k, n) ≤ 6``, few minors); ``gram_t``:
+    ``G = Jᵀ J`` (else ``J Jᵀ``); ``perm`` (m,): indices of ``G`` by diagonal block; ``csize``
+    (c,): their sizes (one of size m: no split); ``drop``: packed positions of the entries
+    between blocks (zero at random samples); ``arrays``: the kernel's tuple ``(pack, rsub,
+    csub, gram_t, perm, csize, drop)``.
     """
 
     use_block: bool
@@ -198,14 +195,10 @@ def aligned(model: Any) -> AlignedChain:
 def compute(
     model: Any, q: np.ndarray, sel: np.ndarray, out: tuple[np.ndarray, ...]
 ) -> tuple[np.ndarray, ...]:
-    """Fill ``out`` = (det, manipulability, condition, sigma_min) for the rows ``sel`` of ``J``.
+    """Fill ``out`` = (det, manipulability, condition, sigma_min), four (N,) float64 arrays.
 
-    Args:
-        model: A loaded model.
-        q: (N, nq) float64 C-contiguous configurations, checked by the caller.
-        sel: (k,) int64 row indices of ``[vx vy vz wx wy wz]``.
-        out: Four (N,) float64 arrays.
-
+    ``q``: (N, nq) float64 C-contiguous configurations, checked by the caller; ``sel``: (k,)
+    int64 indices of the rows ``[vx vy vz wx wy wz]`` of ``J``.
     """
     n, al = q.shape[0], aligned(model)
     key = tuple(int(r) for r in sel)

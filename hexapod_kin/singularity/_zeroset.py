@@ -181,10 +181,7 @@ def compile_factor(text: str, variables: tuple[int, ...]) -> Eval:
 
     ``jet(x, hess)`` with ``x`` (M, v) returns the value (M,), the gradient (M, v) and, with
     ``hess``, the Hessian (M, v, v) (else ``None``).
-
-    Raises:
-        ParameterError: ``text`` does not parse or leaves the whitelist.
-
+    Raises ParameterError: ``text`` does not parse or leaves the whitelist.
     """
     try:
         tree = ast.parse(text, mode="eval")

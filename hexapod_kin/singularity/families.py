@@ -37,17 +37,10 @@ _CHECK_BUDGET = 10.0
 # ------------------------------------------------------------------------ one family
 @dataclass(frozen=True)
 class Family:
-    """One singular family, as numbers (no sympy objects).
+    """One singular family, as numbers: :class:`hexapod_kin.symbolic.SingularFamily`'s fields.
 
-    Attributes:
-        name: A readable label, e.g. ``"q3 = 0 (mod 2*pi)"``.
-        equation: The equation as text (lengths symbolic), e.g. ``"Eq(q3, 0)"``.
-        variables: Indices (0-based) of the joints the factor depends on.
-        joint: Index of the joint when the family is ``q_k = value``, else ``None``.
-        value: That value in [rad] or [m] (``None`` for implicit families).
-        periodic: True when ``value`` repeats every 2π (revolute joint).
-        factor: The factor (text, lengths substituted), zero on the family.
-
+    No sympy objects: ``equation`` is text (lengths symbolic, e.g. ``"Eq(q3, 0)"``) and
+    ``factor`` too (lengths substituted), compiled once (:func:`~._zeroset.compile_factor`).
     """
 
     name: str
@@ -131,12 +124,9 @@ class Families:
     key: str = ""
 
     def nearest(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """The nearest and second-nearest families of ``q`` (M, nq) and the distances to them.
+        """``(index, distance, second_index, second_distance)`` (M,) of ``q`` (M, nq).
 
-        Returns:
-            ``(index, distance, second_index, second_distance)``, each (M,); −1 / inf where
-            there is no (second) family.
-
+        The nearest and second-nearest families; −1 / inf where there is no (second) family.
         """
         m = q.shape[0]
         none = np.full(m, -1, dtype=np.int64), np.full(m, np.inf)
@@ -205,12 +195,8 @@ def _holds(fams: tuple[Family, ...], model: Any, rows: tuple[str, ...]) -> None:
 
     Every zero is singular (``σ_min ≤ 1e-7 σ_max`` at projections of three random
     configurations), and every sign change of a square ``det J`` along four random lines
-    (:func:`_singular_points`) lies within 1e-6 of a family.
-
-    Raises:
-        ValueError: A family where the model's ``J`` keeps its rank, or a singular
-            configuration of the model that no family explains (an edited entry).
-
+    (:func:`_singular_points`) lies within 1e-6 of a family; else ``ValueError`` (an edited
+    entry).
     """
     from .measure import measures
 
@@ -357,13 +343,7 @@ def _derive_job(
 
 
 def _derived(chain: Any, rows: tuple[str, ...], budget: float, qs: np.ndarray) -> tuple[Any, ...]:
-    """:func:`_derive_job`'s answer, from a process of its own unless sympy is loaded here.
-
-    Returns:
-        ``(incomplete, kind, values, families)``, or ``("failed", message)`` (also when the
-        child ended without an answer).
-
-    """
+    """:func:`_derive_job`'s answer or ``("failed", message)``; own process unless sympy's here."""
     from .. import _budget
 
     args = (chain, rows, float(budget), qs)
@@ -381,13 +361,9 @@ def _derived(chain: Any, rows: tuple[str, ...], budget: float, qs: np.ndarray) -
 def _numeric_families(
     kind: str | None, sym: Any, qs: np.ndarray, model: Any, rows: tuple[str, ...]
 ) -> None:
-    """Check the derivation's ``|det|`` (``kind`` ``"det"``) or ``|det(J Jᵀ)|`` (``"gram"``).
+    """Check the derivation's ``|det|`` or ``|det(J Jᵀ)|`` (``kind``), ``sym`` at ``qs``, on J.
 
-    ``sym`` holds its values at ``qs``, compared with the model's Jacobian there.
-
-    Raises:
-        ParameterError: No determinant derived, or they differ (other frames or rows).
-
+    Raises ParameterError: no determinant derived, or they differ (other frames or rows).
     """
     from .measure import measures
 
@@ -410,19 +386,11 @@ def _numeric_families(
 def families_for(
     model: Any, rows: tuple[str, ...], *, derive: bool = False, budget: float = 10.0
 ) -> Families:
-    """The singular families of ``model`` for the Jacobian rows ``rows``.
+    """The singular families of a loaded ``model`` for the Jacobian rows ``rows`` (names).
 
-    Args:
-        model: A loaded model.
-        rows: Row names (see :mod:`hexapod_kin.jacobian_rows`).
-        derive: Derive them with sympy (within ``budget``) when they are not on disk yet;
-            without it, only families already derived (the call never waits on sympy).
-        budget: CPU budget in [s] of the derivation (a stopped one is kept with its budget; a
-            larger one carries on).
-
-    Raises:
-        ParameterError: ``budget`` not a finite value > 0.
-
+    ``derive``: derive them with sympy within ``budget`` (CPU [s]; a stopped run is kept with
+    its budget, a larger one carries on) when not on disk yet; else the call never waits.
+    Raises ParameterError: ``budget`` not a finite value > 0.
     """
     positive("budget", budget)
     chain, why = _table(model)

@@ -109,14 +109,8 @@ def _measures_numpy(jac: np.ndarray) -> tuple[np.ndarray, ...]:
 def default_rows(model: Any) -> tuple[str, ...]:
     """Default row selection for ``model``: ``x, y, z`` plus the non-zero angular rows if square.
 
-    A row is zero when below 1e-12 at 8 random configurations (SCARA: ``x y z wz``).
-
-    Args:
-        model: A loaded model (or a source for :func:`hexapod_kin.load`).
-
-    Returns:
-        Row names from :data:`~hexapod_kin.jacobian_rows.ROW_NAMES`.
-
+    A row is zero when below 1e-12 at 8 random configurations (SCARA: ``x y z wz``). ``model``:
+    a loaded model or a source; the names are from :data:`~hexapod_kin.jacobian_rows.ROW_NAMES`.
     """
     mdl = as_model(model)
 
@@ -140,17 +134,10 @@ def reach(model: Any) -> float:
 
 
 def measures(model: Any, q: Any, rows: str | Sequence[str] | None = None) -> Measures:
-    """Singularity measures of one configuration (Pinocchio Jacobian, numpy SVD).
+    """Singularity measures of one configuration ``q`` (nq,) [rad]/[m] (Pinocchio J, numpy SVD).
 
-    Args:
-        model: A loaded model (or a source for :func:`hexapod_kin.load`).
-        q: Joint values (nq,) in [rad] / [m].
-        rows: Row selection (see module doc); default :func:`default_rows`.
-
-    Raises:
-        ConfigurationError: Bad ``q``.
-        ParameterError: Bad ``rows``.
-
+    ``model``: a loaded model or a source; ``rows``: the row selection (default
+    :func:`default_rows`). Raises ConfigurationError (bad ``q``), ParameterError (bad ``rows``).
     """
     mdl = as_model(model)
     names = selected_rows(mdl, rows)
@@ -168,17 +155,9 @@ def measures_batch(
 ) -> MeasuresBatch:  # fmt: skip
     """Measures of many configurations by the fused compiled kernel, as a :class:`MeasuresBatch`.
 
-    Args:
-        model: A loaded model (or a source).
-        qs: Configurations (N, nq) in [rad] / [m].
-        rows: Row selection; default :func:`default_rows`.
-        out: Optional four preallocated float64 arrays of shape (N,) to fill (det,
-            manipulability, condition, sigma_min); the result's arrays are then these.
-
-    Raises:
-        ConfigurationError: ``qs`` has the wrong shape or non-finite values, or bad ``out``.
-        ParameterError: Bad ``rows``.
-
+    ``qs`` (N, nq) [rad]/[m]; ``model`` and ``rows`` as :func:`measures`. ``out``: optional four
+    float64 (N,) arrays to fill (det, manipulability, condition, sigma_min), then the result's.
+    Raises ConfigurationError (bad ``qs`` or ``out``), ParameterError (bad ``rows``).
     """
     from ._plan import block_plan, compute, output_arrays
 

@@ -84,12 +84,14 @@ def _ro(arr: np.ndarray) -> np.ndarray:
 class ScanResult:
     """Result of :func:`scan` (arrays are read-only).
 
+    Also: ``joint_names`` and ``prismatic`` flags of the n joints, ``joints`` (the scanned
+    ones' indices), ``rows`` of ``J``, the ``threshold`` used, ``q_fixed`` (n,) of the joints not
+    scanned and ``source`` (the model's name).
+
     Attributes:
         q: Configurations (N, n) in [rad] / [m].
-        det: ``det J`` (N,) (NaN where J is not square).
-        manipulability: (N,) ``sqrt(det(J Jᵀ))``.
-        condition: (N,) ``σmax/σmin`` (``inf`` where singular).
-        sigma_min: (N,) smallest singular value ([m] for position rows of revolute joints).
+        det: (N,), and ``manipulability``, ``condition``, ``sigma_min``: as in
+            :class:`~.measure.MeasuresBatch`.
         singular: (N,) boolean mask ``sigma_min < threshold`` or ``sigma_min = 0``.
         family: (N,) index into :attr:`families` of the nearest family of each flagged
             configuration (−1: none).
@@ -101,14 +103,7 @@ class ScanResult:
         family_tol: Distance in [rad]/[m] within which a flagged sample counts as explained.
         family_tols: Per family, the tolerance used: ``family_tol`` widened to ``1.5 ×
             threshold / s`` (``s`` the family's measured lever arm), at most ``4 × family_tol``.
-        joint_names: Names of the n joints.
-        prismatic: (n,) True for prismatic joints.
-        joints: Indices of the scanned joints.
-        rows: Row names of ``J``.
-        threshold: The ``sigma_min`` threshold used.
         grid_shape: Points per scanned joint for a grid scan (``q`` in C order), else ``None``.
-        q_fixed: Values of the joints that were not scanned (n,).
-        source: The model's name.
 
     """
 
@@ -165,9 +160,7 @@ class ScanResult:
     def family_residual(self, q: Any, f: int) -> np.ndarray:
         """Signed residual of family ``f`` at ``q`` (…, n) (zero on the family).
 
-        Raises:
-            ParameterError: ``f`` is not the index of a family.
-
+        Raises ParameterError: ``f`` is not the index of a family.
         """
         if not 0 <= int(f) < len(self.families):
             raise ParameterError(
@@ -182,9 +175,7 @@ class ScanResult:
     def grid(self, name: str) -> np.ndarray:
         """A measure reshaped to :attr:`grid_shape` (grid scans only).
 
-        Raises:
-            ParameterError: Not a grid scan, or an unknown measure name.
-
+        Raises ParameterError: not a grid scan, or an unknown measure name.
         """
         if self.grid_shape is None:
             raise ParameterError("grid(): this scan used random samples, not a grid")
@@ -233,26 +224,14 @@ def _joint_indices(model: Any, joints: Any) -> tuple[int, ...]:
     return tuple(out)
 
 
-def _moving(model: Any) -> list[int]:
-    """Joints that move the tip (a whole hexapod has 15 that do not move one foot)."""
-    moving = sorted({int(c) for c in model.arrays.col})
-    return moving if moving else list(range(model.nq))
-
-
 def default_q_fixed(
     model: Any, rows: Any = None, joints: Sequence[int] | None = None, seed: int = 7
 ) -> np.ndarray:
     """A dexterous configuration for the joints that a scan does not move, in [rad]/[m].
 
     Among 256 seeded random configurations, the one whose worst ``σmin/σmax`` over a coarse
-    grid (5 points per joint) of the scanned ``joints`` is largest.
-
-    Args:
-        model: A loaded model (or a source).
-        rows: Row selection (default :func:`~.measure.default_rows`).
-        joints: Indices of the scanned joints.
-        seed: Seed of the candidates.
-
+    grid (5 points per joint) of the scanned ``joints`` (indices) is largest. ``rows``: the row
+    selection (default :func:`~.measure.default_rows`); ``seed``: of the candidates.
     """
     mdl = as_model(model)
     names = selected_rows(mdl, rows)
@@ -287,18 +266,8 @@ def default_joints(model: Any, rows: Any = None, count: int = 2) -> tuple[int, .
 
     Each joint that moves the tip is swept over its range at 32 seeded configurations of the
     others; its score is the mean spread of ``log σmin`` (ties: revolute, then later joints).
-
-    Args:
-        model: A loaded model (or a source).
-        rows: Row selection (default :func:`~.measure.default_rows`).
-        count: How many joints.
-
-    Returns:
-        Joint indices, ascending.
-
-    Raises:
-        ParameterError: The model has fewer than ``count`` joints.
-
+    ``rows`` as :func:`default_q_fixed`'s. Returns joint indices, ascending.
+    Raises ParameterError: the model has fewer than ``count`` joints.
     """
     mdl = as_model(model)
     if mdl.nq < count:
@@ -307,7 +276,8 @@ def default_joints(model: Any, rows: Any = None, count: int = 2) -> tuple[int, .
     names = selected_rows(mdl, rows)
 
     def build() -> tuple[int, ...]:
-        cands = _moving(mdl) if len(_moving(mdl)) >= count else list(range(mdl.nq))
+        moving = sorted({int(c) for c in mdl.arrays.col})  # a hexapod: 15 do not move one foot
+        cands = moving if len(moving) >= count else list(range(mdl.nq))
         base, score = mdl.random_q(32, seed=11), np.zeros(mdl.nq)
         floor = 1e-12 * max(reach(mdl), 1e-12)
         for j in cands:
@@ -328,27 +298,17 @@ def _grid_points(
     model: Any, joints: tuple[int, ...], grid: Any, q_fixed: np.ndarray
 ) -> tuple[np.ndarray, tuple[int, ...]]:
     counts: list[Any] = [grid] * len(joints) if np.isscalar(grid) else list(grid)
-    if len(counts) != len(joints):
-        raise ParameterError(
-            f"grid={grid!r}: one count or one per scanned joint ({len(joints)}) is required",
-            parameter="grid",
-            value=grid,
-            allowed=f"an integer >= 2 or {len(joints)} of them",
-        )
-    shape = []
-    for c in counts:
-        if not _count(c, 2):
-            msg = f"grid={grid!r}: counts must be integers >= 2"
-            raise ParameterError(msg, parameter="grid", value=grid, allowed="integers >= 2")
-        shape.append(int(c))
-    total = math.prod(shape)
-    if total > MAX_CONFIGURATIONS:
-        raise ParameterError(
-            f"grid={grid!r} makes {total} configurations; at most {MAX_CONFIGURATIONS:,}",
-            parameter="grid",
-            value=grid,
-            allowed=f"at most {MAX_CONFIGURATIONS:,} configurations in all",
-        )
+    shape = [int(c) for c in counts if _count(c, 2)]
+    total, most = math.prod(shape), f"{MAX_CONFIGURATIONS:,}"
+    for bad, why, a in (  # the first that fails
+        (len(counts) != len(joints), f": one count or one per scanned joint ({len(joints)}) is "
+         "required", f"an integer >= 2 or {len(joints)} of them"),
+        (len(shape) != len(counts), ": counts must be integers >= 2", "integers >= 2"),
+        (total > MAX_CONFIGURATIONS, f" makes {total} configurations; at most {most}",
+         f"at most {most} configurations in all"),
+    ):  # fmt: skip
+        if bad:
+            raise ParameterError(f"grid={grid!r}{why}", parameter="grid", value=grid, allowed=a)
     axes = [np.linspace(model.lower[j], model.upper[j], c) for j, c in zip(joints, shape)]
     q = np.empty((*shape, model.nq))
     q[...] = q_fixed
@@ -400,7 +360,7 @@ def scan(
         model: A loaded model or any source for :func:`hexapod_kin.load`.
         grid: Points per scanned joint (one count, or one per joint) over the joint limits;
             default :data:`DEFAULT_GRID`.
-        samples: Number of uniform random configurations (instead of a grid).
+        samples: Uniform random configurations instead of a grid (``seed``: theirs).
         joints: Joints to scan (names or indices, or ``"all"``); default
             :func:`default_joints`. The others stay at ``q_fixed``.
         rows: Row selection of ``J`` (``("x", "y", "z", "wz")``, ``"position"``, ``"all"``);
@@ -414,14 +374,12 @@ def scan(
         families: ``True``: derive them when needed (sympy, within ``family_budget``);
             ``"cached"``: only families already derived; ``False``: none.
         family_budget: CPU budget in [s] of the families (:func:`~.families.families_for`).
-        seed: Random seed for ``samples``.
         progress: Show a tqdm bar on stderr (default: when N > 2,000,000 and stderr is a tty).
         chunk: Configurations per kernel call (scans above :data:`SMALL_SCAN`).
+        seed: Of ``samples``.
 
     Raises:
-        ParameterError: Bad ``grid``/``samples``, joints, rows, ``threshold``, ``families``
-            or ``chunk``.
-        ConfigurationError: Bad ``q_fixed``.
+        ParameterError: Bad arguments. ConfigurationError: Bad ``q_fixed`` or ``family_tol``.
 
     """
     mdl = as_model(model)

@@ -75,10 +75,8 @@ class ChunkStore:
     ) -> dict[int, np.ndarray]:  # fmt: skip
         """The stored chunks that pass every check, by number (the others: one warning).
 
-        Raises:
-            ConfigurationError: The folder holds chunks of another sweep (its readable
-                manifest names another key): an interrupted sweep is never overwritten.
-
+        Raises ConfigurationError when the folder holds chunks of another sweep (its readable
+        manifest names another key): an interrupted sweep is never overwritten.
         """
         if not self.parts.is_dir():
             return {}
@@ -107,9 +105,8 @@ class ChunkStore:
                     results[k] = got
         if bad:
             names = ", ".join(bad[:3]) + (f" and {len(bad) - 3} more" if len(bad) > 3 else "")
-            verb = "it does not hold what it claims"
-            if len(bad) > 1:
-                verb = "they do not hold what they claim"
+            who = ("they do not", "they claim") if bad[1:] else ("it does not", "it claims")
+            verb = f"{who[0]} hold what {who[1]}"
             where = f"{names} in {self.parts.name}"
             _disk.damaged("sweep", where, verb, "scoring again", stacklevel=3)
         return results

@@ -48,13 +48,9 @@ METHODS: tuple[str, ...] = ("grid", "random", "lhs")
 
 @dataclass(frozen=True)
 class Range:
-    """A swept parameter: ``n`` grid points from ``lo`` to ``hi`` (inclusive).
+    """A swept parameter: ``n >= 1`` grid points from ``lo`` to ``hi >= lo`` (inclusive, finite).
 
-    Attributes:
-        lo: Lower bound (units of the parameter).
-        hi: Upper bound (``>= lo``).
-        n: Grid points (``>= 1``; ``random``/``lhs`` sampling ignores it).
-
+    ``random``/``lhs`` sampling ignores ``n``.
     """
 
     lo: float
@@ -73,9 +69,8 @@ class Range:
         if int(self.n) != self.n or self.n < 1:
             msg = f"range n={self.n!r}: expected an integer >= 1"
             raise ParameterError(msg, parameter="n", value=self.n)
-        object.__setattr__(self, "lo", lo)
-        object.__setattr__(self, "hi", hi)
-        object.__setattr__(self, "n", int(self.n))
+        for name, v in (("lo", lo), ("hi", hi), ("n", int(self.n))):
+            object.__setattr__(self, name, v)
 
     def grid(self) -> np.ndarray:
         """The ``n`` grid values (``lo`` alone when ``n == 1``)."""
@@ -83,19 +78,10 @@ class Range:
 
 
 def parse_range(name: str, text: str, scale: float = 1.0) -> float | Range:
-    """Parse ``VALUE``, ``A:B`` or ``A:B:N`` (CLI syntax) into a number or a :class:`Range`.
+    """Parse ``VALUE``, ``A:B`` or ``A:B:N`` (CLI syntax) into a float or a :class:`Range`.
 
-    Args:
-        name: Parameter name (for the error message).
-        text: The text.
-        scale: Factor applied to the values (e.g. π/180 for degrees).
-
-    Returns:
-        A float (fixed parameter) or a :class:`Range`.
-
-    Raises:
-        ParameterError: Malformed text, with the expected syntax.
-
+    ``name`` is the parameter named in errors; ``scale`` multiplies the values (π/180: degrees).
+    Raises ParameterError: malformed text, with the expected syntax.
     """
     parts = str(text).split(":")
     try:
@@ -114,11 +100,8 @@ def parse_range(name: str, text: str, scale: float = 1.0) -> float | Range:
 class DesignSpace:
     """Fixed and swept design parameters.
 
-    Attributes:
-        values: Parameter name → fixed value or :class:`Range` (missing names take
-            :data:`DEFAULTS`).
-        total: If set, ``l3 = total − l1 − l2`` in [m] (``l3`` must then not be given).
-
+    ``values``: parameter name → fixed value or :class:`Range` (missing names take
+    :data:`DEFAULTS`); ``total``: if set, ``l3 = total − l1 − l2`` in [m] (then no ``l3``).
     """
 
     values: Mapping[str, float | Range] = field(default_factory=dict)
@@ -166,21 +149,12 @@ class DesignSpace:
     def designs(
         self, method: str = "grid", samples: int = 100, seed: int = 0, first: int | None = None
     ) -> np.ndarray:
-        """The designs as a (N, len(PARAMETERS)) array, one row per design, columns PARAMETERS.
+        """The designs, a read-only (N, len(PARAMETERS)) array: one row per design.
 
-        Args:
-            method: ``"grid"`` (cartesian product of the ranges), ``"random"`` (uniform) or
-                ``"lhs"`` (Latin hypercube).
-            samples: Number of designs drawn by ``random``/``lhs``.
-            seed: Seed of ``random``/``lhs``.
-            first: Only the grid's first ``first`` points (a probe of a huge grid).
-
-        Returns:
-            A read-only float array; rows violating ``l3 > 0`` (with ``total``) are dropped.
-
-        Raises:
-            ParameterError: Unknown method, ``samples < 1``, or invalid designs.
-
+        ``method``: ``"grid"`` (cartesian product of the ranges, ``first``: only its first
+        points, a probe of a huge grid), ``"random"`` (uniform) or ``"lhs"`` (Latin hypercube),
+        ``samples`` designs from ``seed``. With ``total``, rows with ``l3 <= 0`` are dropped.
+        Raises ParameterError: unknown method, ``samples < 1``, or invalid designs.
         """
         one_of("method", method, METHODS)
         swept = self.swept
@@ -256,18 +230,10 @@ class DesignSpace:
 
 
 def design_chain(design: Any) -> Any:
-    """The :func:`~hexapod_kin.robots.hexabot_leg` chain of one design (with its limits).
+    """The :func:`~hexapod_kin.robots.hexabot_leg` chain (hip frame, limits, no mount) of a design.
 
-    Args:
-        design: One design: 13 values in the order of :data:`PARAMETERS`, or a mapping
-            name → value (missing names take :data:`DEFAULTS`).
-
-    Returns:
-        A :class:`~hexapod_kin.params.Chain` (hip frame; the mount is not part of it).
-
-    Raises:
-        ParameterError: Bad lengths or limits.
-
+    ``design``: 13 values in the order of :data:`PARAMETERS`, or name → value (missing names
+    take :data:`DEFAULTS`). Raises ParameterError: bad lengths or limits.
     """
     from ..params import JointLimits
     from ..robots import hexabot_leg

@@ -24,21 +24,10 @@ def _columns(table: Mapping[str, Any], names: Sequence[str]) -> np.ndarray:
 
 
 def pareto_front(table: Mapping[str, Any], objectives: Sequence[str] = OBJECTIVES) -> np.ndarray:
-    """Non-dominated feasible designs, all objectives maximised.
+    """(N,) mask of the non-dominated feasible designs of a sweep table, ``objectives`` maximised.
 
     Dominated: another one at least as good in every objective, better in one; infeasible
-    designs are never on the front.
-
-    Args:
-        table: Column name → (N,) array (a sweep table).
-        objectives: Columns to maximise.
-
-    Returns:
-        (N,) bool mask of the front.
-
-    Raises:
-        ParameterError: An objective is not a column.
-
+    designs are never on the front. Raises ParameterError: an objective is not a column.
     """
     f = _columns(table, objectives)
     n = f.shape[0]
@@ -58,20 +47,10 @@ def pareto_front(table: Mapping[str, Any], objectives: Sequence[str] = OBJECTIVE
 
 
 def best_index(table: Mapping[str, Any], key: Sequence[str] = OBJECTIVES) -> int:
-    """Index (row) of the best feasible design: max of ``key[0]``, ties broken by the next keys.
+    """Row of the best feasible design (-1: none): max of ``key[0]``, ties broken by the next keys.
 
-    Ties are values within 1e-9 (relative) of the maximum.
-
-    Args:
-        table: Column name → (N,) array.
-        key: Columns by priority.
-
-    Returns:
-        The row index, or -1 when no design is feasible.
-
-    Raises:
-        ParameterError: A key is not a column.
-
+    Ties are values within 1e-9 (relative) of the maximum; ``table``: column name → (N,) array.
+    Raises ParameterError: a key is not a column.
     """
     f = _columns(table, key)
     n = f.shape[0]

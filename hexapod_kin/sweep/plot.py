@@ -27,20 +27,10 @@ def plot_sweep(
     """Score maps (stride, volume, σ_min) over two parameters and the Pareto front, one PNG.
 
     Each map cell shows the best score over the other parameters (random/LHS: a scatter); the
-    front panel plots stride against volume, coloured by min σ_min.
-
-    Args:
-        result: A :class:`~hexapod_kin.sweep.run.SweepResult` (or its ``table`` dict).
-        path: Output PNG (written atomically).
-        params: The two parameters of the maps (default: the two most varied ones).
-
-    Returns:
-        The written path.
-
-    Raises:
-        ParameterError: Unknown parameter names.
-        OptionalDependencyError: matplotlib missing.
-
+    front panel plots stride against volume, coloured by min σ_min. ``result``: a
+    :class:`~hexapod_kin.sweep.run.SweepResult` (or its ``table``); ``params``: the maps' two
+    parameters (default: the two most varied). Returns ``path``, the PNG written atomically.
+    Raises ParameterError: unknown parameter names; OptionalDependencyError: matplotlib missing.
     """
     from ..plots import pyplot, save_figure
 

@@ -87,14 +87,9 @@ _MAX_TABLE_BYTES = 1 << 30
 
 
 def table_paths(out: str | Path) -> dict[str, Path]:
-    """The table and the resumable chunks' sidecar of ``out``.
+    """The table and chunks' sidecar: ``x.csv`` → ``{"csv": x.csv, "parts": .x.csv.sweep-parts}``.
 
-    ``x.csv`` → ``{"csv": x.csv, "parts": .x.csv.sweep-parts}`` (likewise ``.parquet``,
-    ``.json``).
-
-    Raises:
-        ParameterError: ``out`` has another extension.
-
+    Raises ParameterError: ``out`` has another extension.
     """
     p = Path(out)
     kind = TABLE_FORMATS.get(p.suffix.lower())
@@ -242,7 +237,7 @@ def sweep(
         space: The design space.
         method: ``"grid"``, ``"random"`` or ``"lhs"``.
         samples: Designs drawn by ``random``/``lhs``.
-        seed: Seed of the design sampling and of the Monte-Carlo volume samples.
+        seed: Of the design sampling and of the Monte-Carlo volume samples.
         mc_samples: Monte-Carlo points per design (volume).
         line_points: Grid steps per side of the stride search.
         stride_points: Points along the stride for the σ/singularity/limit minima.
@@ -251,7 +246,7 @@ def sweep(
         chunk_size: Designs per chunk (default: about 20 chunks, 10..250 designs each).
         workers: Local threads scoring chunks (default: one per core). Ignored on Dask.
         client: A ``distributed.Client`` to run the chunks on.
-        scheduler: Address of a Dask scheduler (``tcp://host:8786``) to connect to.
+        scheduler: Or the address of a Dask scheduler to connect to (``tcp://host:8786``).
         progress: Show a tqdm bar on stderr (None: when stderr is a terminal).
         on_chunk: Called with the chunk number after each chunk is scored (and written).
         allow_large: Run a sweep estimated beyond :data:`MAX_HOURS` or :data:`MAX_GB`.
@@ -397,16 +392,6 @@ def _summary(table: Mapping[str, np.ndarray], spec: dict[str, Any], key: str) ->
     }
 
 
-def _csv_text(table: Mapping[str, np.ndarray]) -> str:
-    names = list(table)
-    cols = [np.asarray(table[c]) for c in names]
-    ints = {"index", "feasible", "volume_exact", "pareto"}
-    cells = [
-        [str(int(v)) if nm in ints else repr(float(v)) for v in c] for nm, c in zip(names, cols)
-    ]
-    return "\n".join([",".join(names), *(",".join(row) for row in zip(*cells))]) + "\n"
-
-
 def _write_tables(
     table: Mapping[str, np.ndarray], summary: dict[str, Any], paths: dict[str, Path]
 ) -> dict[str, str]:
@@ -415,7 +400,11 @@ def _write_tables(
 
     kind, path = next((k, v) for k, v in paths.items() if k != "parts")
     if kind == "csv":
-        atomic_write(path, _csv_text(table))
+        ints = {"index", "feasible", "volume_exact", "pareto"}
+        cells = [[str(int(v)) if nm in ints else repr(float(v)) for v in np.asarray(c)]
+                 for nm, c in table.items()]  # fmt: skip
+        rows = (",".join(row) for row in zip(*cells))
+        atomic_write(path, "\n".join([",".join(table), *rows]) + "\n")
     elif kind == "parquet":
         import pyarrow as pa
         import pyarrow.parquet as pq
@@ -432,13 +421,7 @@ def _write_tables(
 
 
 def read_results(path: str | Path) -> dict[str, np.ndarray]:
-    """Read a sweep table written by :func:`sweep` (CSV, Parquet or JSON) as column → array.
-
-    Args:
-        path: The ``.csv``, ``.parquet`` or ``.json`` file.
-
-    Returns:
-        Column name → (N,) float array.
+    """A sweep table written by :func:`sweep` (``.csv``, ``.parquet``, ``.json``): column → (N,).
 
     Raises:
         ParameterError: An unknown suffix.

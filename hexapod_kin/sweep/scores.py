@@ -50,13 +50,6 @@ _TWO_PI = 2.0 * math.pi
 _BLOCK = 1 << 18  # targets per closed-form call (bounds the temporary arrays)
 
 
-def _solve(d: np.ndarray, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Within-limits solutions (N, 4, 3) and validity (N, 4) of points (N, 3), designs (N, 13)."""
-    return leg_solutions(
-        pts, (d[:, 0], d[:, 1], d[:, 2]), sign=-1.0, limits=(d[:, 6:12:2], d[:, 7:12:2])
-    )
-
-
 def _member(d: np.ndarray, pts: np.ndarray) -> np.ndarray:
     """(N,) True where point i is reachable within the limits by design row i."""
     out = np.empty(len(pts), dtype=bool)
@@ -153,7 +146,10 @@ def _score(d: np.ndarray, unit: np.ndarray, line: int, points: int, use: float) 
     step = 2.0 * half[:, None] * k / (points - 1) if points > 1 else half[:, None]
     ts = centre[:, None] - half[:, None] + step  # (n, points)
     pts = p0[:, None, :] + ts[..., None] * direction[:, None, :]
-    q, valid = _solve(np.repeat(d, points, axis=0), pts.reshape(-1, 3))
+    dr = np.repeat(d, points, axis=0)  # within-limits solutions (N, 4, 3), validity (N, 4)
+    lo, hi = dr[:, 6:12:2], dr[:, 7:12:2]
+    q, valid = leg_solutions(pts.reshape(-1, 3), (dr[:, 0], dr[:, 1], dr[:, 2]), sign=-1.0,
+                             limits=(lo, hi))  # fmt: skip
     rep = (np.repeat(v, points)[:, None] for v in (l1, l2, l3))
     sv, mv, rho = _sigma_rows(q[..., 1], q[..., 2], *rep)
     sv = np.where(valid, sv, -1.0)
@@ -162,8 +158,6 @@ def _score(d: np.ndarray, unit: np.ndarray, line: int, points: int, use: float) 
     qb = q[rows, best]
     aq3 = np.abs(qb[:, 2]) % _TWO_PI
     aq3 = np.minimum(aq3, _TWO_PI - aq3)
-    lo = np.repeat(d[:, 6:12:2], points, axis=0)
-    hi = np.repeat(d[:, 7:12:2], points, axis=0)
     cols = {
         "sigma_min": sv[rows, best],
         "manipulability": mv[rows, best],
@@ -179,13 +173,7 @@ def _score(d: np.ndarray, unit: np.ndarray, line: int, points: int, use: float) 
 
 
 def unit_samples(seed: int, n: int) -> np.ndarray:
-    """The (n, 3) uniform unit samples of the Monte-Carlo volume (the same for every design).
-
-    Args:
-        seed: The sweep's seed.
-        n: Number of samples.
-
-    """
+    """The (n, 3) uniform unit samples of the Monte-Carlo volume for the sweep's ``seed``."""
     return np.random.Generator(np.random.PCG64([int(seed), 0x5EED])).random((int(n), 3))
 
 
@@ -198,23 +186,13 @@ def score_designs(
     stride_points: int = 64,
     stride_use: float = 0.9,
 ) -> dict[str, np.ndarray]:
-    """Score designs (rows of :data:`~hexapod_kin.sweep.designs.PARAMETERS`), vectorised.
+    """Score designs, (N, 13) rows of :data:`~hexapod_kin.sweep.designs.PARAMETERS` (SI units).
 
-    Args:
-        designs: (N, 13) array, columns ``PARAMETERS`` (SI units).
-        mc_samples: Monte-Carlo points per design for the volume.
-        seed: Seed of the (common) Monte-Carlo samples.
-        line_points: Grid steps per side of the stride search (then bisection).
-        stride_points: Points along the stride for the σ/singularity/limit minima.
-        stride_use: Central fraction of the stride over which those minima are taken.
+    The options are :func:`~hexapod_kin.sweep.sweep`'s (``seed``: of the common Monte-Carlo
+    samples; ``line_points``: grid steps per side of the stride search, then bisection).
 
-    Returns:
-        Column name → (N,) float array, the names of :data:`SCORES` (each design's scores
-        depend only on its parameters and the seed).
-
-    Raises:
-        ParameterError: Bad shapes or option values.
-
+    Returns column name → (N,) float array, the names of :data:`SCORES` (each design's scores
+    depend only on its parameters and the seed). Raises ParameterError: bad shapes or options.
     """
     d = np.ascontiguousarray(np.asarray(designs, dtype=np.float64))
     if d.ndim != 2 or d.shape[1] != len(PARAMETERS):
@@ -249,15 +227,9 @@ def score_designs(
 
 
 def reachable(designs_row: Any, points: Any) -> np.ndarray:
-    """Exact membership test of the sweep for one design: (N,) bool.
+    """(N,) True where one design (13 values, ``PARAMETERS``) reaches ``points`` (N, 3) [m].
 
-    Args:
-        designs_row: One design (13 values, columns ``PARAMETERS``).
-        points: (N, 3) foot positions in the hip frame [m].
-
-    Returns:
-        True where some IK solution lies within the joint limits.
-
+    The sweep's exact test: some IK solution in the hip frame lies within the joint limits.
     """
     row = np.asarray(designs_row, dtype=float)
     pts = np.asarray(points, dtype=float).reshape(-1, 3)
@@ -293,18 +265,8 @@ def volume_closed_form(
     section at signed distance ``l1 + u`` is a set of intervals S_z, reached with q1 = φ or
     φ + π: ``V = ∫ dz [Δ/2 (M(P) + M(N)) − max(Δ − π, 0) M(P ∩ N)]``, ``P = S_z ∩ (0, ∞)``,
     ``N = (−S_z) ∩ (0, ∞)``, ``M(X) = Σ (hi² − lo²)``, integrated in closed form between
-    breakpoints. The seed leg, full rotation: 0.05637 m³.
-
-    Args:
-        l1: Coxa length [m].
-        l2: Femur length [m].
-        l3: Tibia length [m].
-        q1_lower: Hip lower limit [rad].
-        q1_upper: Hip upper limit [rad].
-        q2_lower: Knee lower limit [rad].
-        q2_upper: Knee upper limit [rad].
-        q3_lower: Ankle lower limit [rad].
-        q3_upper: Ankle upper limit [rad].
+    breakpoints. The seed leg, full rotation: 0.05637 m³. Lengths ``l1`` (coxa), ``l2``
+    (femur), ``l3`` (tibia) in [m]; the hip, knee and ankle limits in [rad].
 
     Returns:
         The volume in [m³], or NaN when the knee range is narrower than 2π (no closed form).

@@ -16,17 +16,10 @@ from sympy.polys.rings import ring
 
 
 def ring_det(entries: Sequence[Any], n: int, gens: Sequence[sp.Symbol]) -> Any | None:
-    """``det`` of the n×n matrix of expanded polynomial ``entries`` (row-major), expanded.
+    """``det`` of the n×n matrix of polynomial ``entries`` (n², row-major), expanded.
 
-    Args:
-        entries: n² sympy expressions, polynomials in ``gens`` and other symbols.
-        n: The size.
-        gens: The generators to put first (the other symbols follow, by name).
-
-    Returns:
-        The determinant as an expanded sympy expression, or ``None`` when an entry is not a
-        polynomial with rational coefficients.
-
+    The ring's generators are ``gens``, then the other symbols by name; ``None`` when an entry
+    is not a polynomial with rational coefficients.
     """
     entries = [sp.sympify(e) for e in entries]
     if any(e.has(sp.Float) for e in entries):

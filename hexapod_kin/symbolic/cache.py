@@ -9,6 +9,7 @@ damaged or foreign entry is ignored with one ``CacheWarning``.
 
 from __future__ import annotations
 
+from contextlib import suppress
 from dataclasses import fields
 from pathlib import Path
 from typing import Any
@@ -127,20 +128,16 @@ def snapshot(digest: str) -> bytes | None:
 def restore(digest: str, data: bytes | None) -> None:
     """Put the entry of ``digest`` back as :func:`snapshot` found it (after a Ctrl-C)."""
     path = cache_dir() / f"{digest}.json"
-    try:
+    with suppress(OSError, HexapodKinError):
         if data is None:
             path.unlink(missing_ok=True)
         else:
             atomic_write(path, data, sync=False)
-    except (OSError, HexapodKinError):
-        pass
     sweep(digest)
 
 
 def sweep(digest: str) -> None:
     """Remove the temporary files a killed derivation of ``digest`` may have left."""
     for tmp in cache_dir().glob(f".{digest}.json.*.tmp"):
-        try:
+        with suppress(OSError):
             tmp.unlink()
-        except OSError:
-            pass

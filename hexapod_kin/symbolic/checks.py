@@ -30,19 +30,11 @@ NUMPY_FUNCTIONS: dict[Any, Any] = {
 
 
 def evaluate(expr: Any, values: Mapping[Any, Any]) -> Any:
-    """The value of ``expr`` with ``values`` (symbol → number or array) at its symbols.
+    """``expr`` at ``values``: a float or an array (broadcasting together) per symbol.
 
-    Args:
-        expr: A sympy expression built of numbers, symbols, ``+``, ``*``, powers and
-            the functions ``sin cos tan exp log Abs atan2 asin acos atan``.
-        values: A float or an array (broadcasting together) for every symbol of ``expr``.
-
-    Returns:
-        A float or an array (the broadcast shape of the values used).
-
-    Raises:
-        ValueError: A symbol without a value, or a function outside the list.
-
+    ``expr`` is built of numbers, symbols, ``+``, ``*``, powers and the functions ``sin cos tan
+    exp log Abs atan2 asin acos atan``; the value is a float or an array of the broadcast shape.
+    Raises ValueError: a symbol without a value, or a function outside the list.
     """
     return _value(sp.sympify(expr), values, {})
 
@@ -119,7 +111,8 @@ def _same(a: np.ndarray, b: np.ndarray) -> bool:
 
 def _reference(chain: Chain, qv: np.ndarray) -> dict[str, np.ndarray]:
     """The table's own numbers at ``qv`` (plain numpy), named as the stored matrices."""
-    from .._table_kin import table_position_jacobian, table_transforms
+    from .._table_kin import table_transforms
+    from ._numbers import numeric_jacobian
 
     ts = table_transforms(chain, qv)
     base, tool = chain.base_matrix, chain.tool_matrix
@@ -130,11 +123,8 @@ def _reference(chain: Chain, qv: np.ndarray) -> dict[str, np.ndarray]:
         out[f"cumulative.{j}"] = acc
     out["tip"] = acc @ tool
     out["p"] = out["tip"][:3, 3:4]
-    lin = table_position_jacobian(chain, qv)
-    revolute = [chain.rows[j].sigma == "revolute" for j in chain.joint_rows]
-    z = [out[f"cumulative.{j}"][:3, 2] for j in chain.joint_rows]
-    ang = np.column_stack([zj if r else np.zeros(3) for zj, r in zip(z, revolute)])
-    out["J_indirect"], out["J_direct"] = lin, np.vstack([lin, ang])
+    out["J_direct"] = numeric_jacobian(chain, qv, range(6))
+    out["J_indirect"] = out["J_direct"][:3]
     return out
 
 

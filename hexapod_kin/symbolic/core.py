@@ -26,7 +26,6 @@ from ._numbers import numeric_jacobian as numeric_jacobian
 from ._numbers import sigma_ratio as sigma_ratio
 from ._numbers import single_joint_roots as single_joint_roots
 from ._trigpoly import _chop, _det_poly, _reduce, _to_poly, _trig_symbols
-from .fallback import affine, product, z_cross
 
 
 def khalil_matrix(alpha: Any, d: Any, theta: Any, r: Any) -> sp.Matrix:
@@ -80,6 +79,25 @@ def _same(expr: Any) -> Any:
     return expr
 
 
+# the budget's fallback (stage 1 unfinished): products as unevaluated sums (evaluate=False,
+# zeros dropped, ones skipped), built in milliseconds, equal in value, never printed
+def product(a: sp.Matrix, b: sp.Matrix) -> sp.Matrix:
+    """``a·b`` as unevaluated sums of unevaluated products."""
+
+    def entry(i: int, j: int) -> Any:
+        terms = []
+        for k in range(a.cols):
+            x, y = a[i, k], b[k, j]
+            if x == 0 or y == 0:
+                continue
+            terms.append(x if y == 1 else y if x == 1 else sp.Mul(x, y, evaluate=False))
+        if not terms:
+            return sp.Integer(0)
+        return terms[0] if len(terms) == 1 else sp.Add(*terms, evaluate=False)
+
+    return sp.Matrix(a.rows, b.cols, entry)
+
+
 def _rotation(rot: np.ndarray) -> sp.Matrix:
     """A numeric rotation as sympy, exact when its roll-pitch-yaw are nice angles."""
     from ..params import matrix_to_rpy
@@ -104,12 +122,8 @@ def _number(x: float) -> sp.Expr:
 def length_symbols(chain: Chain, names: Mapping[str, str] | None) -> dict[str, Any]:
     """One symbol per non-zero ``d``/``r`` entry (and tool offset); values and sources.
 
-    Returns:
-        ``{"per_row": [(d, r)], "values": {sym: m}, "sources": {sym: key}, "tool": [x, y, z]}``.
-
-    Raises:
-        ParameterError: ``names`` keys that are not lengths of the table, or reused names.
-
+    Returns ``{"per_row": [(d, r)], "values": {sym: m}, "sources": {sym: key}, "tool": [x, y,
+    z]}``. Raises ParameterError: ``names`` keys that are not lengths of the table, or reused.
     """
     entries = []
     for j, row in enumerate(chain.rows, start=1):
@@ -196,27 +210,28 @@ def kinematics(
         tip_in[j] = vec
         if j > 0:
             t = transforms[j]
-            vec = cheap_(t[:3, :3] * vec + t[:3, 3]) if simplify else affine(t, vec)
+            if simplify:
+                vec = cheap_(t[:3, :3] * vec + t[:3, 3])
+            else:  # R v + o, unevaluated
+                vec = product(t[:3, :], sp.Matrix([*vec, 1]))
     cols = []
     for j in chain.joint_rows:
         rot = cumulative[j][:3, :3]
         if chain.rows[j].sigma == "revolute":
             v = tip_in[j]
-            lin = cheap_(rot[:, 1] * v[0] - rot[:, 0] * v[1]) if simplify else z_cross(rot, v)
+            if simplify:  # R (z × v) = R[:, 1] v_x − R[:, 0] v_y
+                lin = cheap_(rot[:, 1] * v[0] - rot[:, 0] * v[1])
+            else:
+                lin = product(rot[:, :2], sp.Matrix([sp.Mul(-1, v[1], evaluate=False), v[0]]))
             cols.append(sp.Matrix.vstack(lin, rot[:, 2]))
         else:
             cols.append(sp.Matrix.vstack(rot[:, 2], sp.zeros(3, 1)))
     jd = sp.Matrix.hstack(*cols)
     # without simplification (the fallback) no derivative: the direct one's linear rows
     ji = _indirect(p, q, chain.sigmas) if simplify else jd[:3, :]
-    out = {"transforms": tuple(transforms), "base": base_t, "tool": tool_t}
-    return out | {
-        "cumulative": tuple(cumulative),
-        "tip": tip,
-        "p": p,
-        "J_direct": jd,
-        "J_indirect": ji,
-    }
+    return {"transforms": tuple(transforms), "base": base_t, "tool": tool_t,
+            "cumulative": tuple(cumulative), "tip": tip, "p": p, "J_direct": jd,
+            "J_indirect": ji}  # fmt: skip
 
 
 def _indirect(p: sp.Matrix, q: Sequence[sp.Symbol], sigmas: Sequence[str]) -> sp.Matrix:
@@ -252,18 +267,14 @@ def _indirect(p: sp.Matrix, q: Sequence[sp.Symbol], sigmas: Sequence[str]) -> sp
     return sp.Matrix(rows)
 
 
-def _inverse(t: sp.Matrix) -> sp.Matrix:
-    rot, pos = t[:3, :3], t[:3, 3]
-    return _homogeneous(rot.T, -rot.T * pos)
-
-
 def _frames_in(transforms: Sequence[sp.Matrix], m: int) -> list[sp.Matrix]:
     """``^mT_k`` for every Khalil frame k = 0..N (cheaply simplified)."""
     n_rows = len(transforms)
     frames: list[Any] = [None] * (n_rows + 1)
     frames[m] = sp.eye(4)
     for k in range(m - 1, -1, -1):
-        frames[k] = cheap(frames[k + 1] * _inverse(transforms[k]))
+        rot, pos = transforms[k][:3, :3], transforms[k][:3, 3]
+        frames[k] = cheap(frames[k + 1] * _homogeneous(rot.T, -rot.T * pos))
     for k in range(m + 1, n_rows + 1):
         frames[k] = cheap(frames[k - 1] * transforms[k - 1])
     return frames
@@ -272,12 +283,9 @@ def _frames_in(transforms: Sequence[sp.Matrix], m: int) -> list[sp.Matrix]:
 def frame_jacobian(
     chain: Chain, frames: Sequence[sp.Matrix], point: sp.Matrix
 ) -> tuple[sp.Matrix, bool]:
-    """6×n Jacobian with the axes of the frame ``frames`` are expressed in, at ``point``.
+    """``(J, block_triangular)``: the 6×n J at ``point`` in the axes ``frames`` are expressed in.
 
-    Returns:
-        ``(J, block_triangular)``; block-triangular when the last three columns have no
-        linear part (a spherical wrist seen from its centre).
-
+    Block-triangular: the last three columns have no linear part (a wrist seen from its centre).
     """
     cols = []
     for j in chain.joint_rows:
@@ -343,12 +351,10 @@ def _depends(expr: Any, q: Sequence[sp.Symbol]) -> bool:
 def trig_factor(
     expr: Any, q: Sequence[sp.Symbol], sigmas: Sequence[str]
 ) -> tuple[Any, list[tuple[Any, int]]]:
-    """Factor a trigonometric polynomial in ``q`` into irreducible factors.
+    """``(constant, [(factor, multiplicity), ...])``: a trig polynomial in ``q`` factored.
 
-    Returns:
-        ``(constant, [(factor, multiplicity), ...])`` with factors in compact trigonometric
-        form; the product ``constant · Π factor**mult`` equals ``expr``.
-
+    The factors are irreducible, in compact trigonometric form; ``constant · Π factor**mult``
+    equals ``expr``.
     """
     return _factor_poly(_to_poly(expr, q, sigmas), q)
 
@@ -568,13 +574,6 @@ def _deficiency(
 
 
 # ---------------------------------------------------------------------- printing
-def _trig_power(expr: Any) -> bool:
-    return any(
-        p.base.func in (sp.sin, sp.cos) and p.exp.is_Integer and p.exp > 1
-        for p in expr.atoms(sp.Pow)
-    )
-
-
 def _collect_trig(expr: Any) -> Any:
     """Terms grouped by their trigonometric part, each coefficient factored (an identity)."""
     groups: dict[Any, list[Any]] = {}
@@ -600,7 +599,9 @@ def tidy(expr: Any, q: Sequence[sp.Symbol], sigmas: Sequence[str], ops: int = 40
         return expr
     best, size = expr, sp.count_ops(expr)
     try:
-        e = _reduce(_to_poly(expr, q, sigmas), q) if _trig_power(expr) else expr
+        powers = (p.base.func in (sp.sin, sp.cos) and p.exp.is_Integer and p.exp > 1
+                  for p in expr.atoms(sp.Pow))  # fmt: skip
+        e = _reduce(_to_poly(expr, q, sigmas), q) if any(powers) else expr
         e = _to_trig(e, q) if e is not expr else cheap(e)  # folds angle sums
         forms = (e, _collect_trig(e))
     except (sp.PolynomialError, TypeError, ValueError):  # an entry outside the trig ring

@@ -46,10 +46,10 @@ _GRAM_OPS = 300
 class Derivation:
     """Symbolic kinematics of one chain (all sympy objects; lengths symbolic).
 
+    ``chain`` is the chain it was derived from, ``q`` its joint symbols ``q1..qn`` (named
+    ``joint_names``), ``tip`` the tip frame's name, ``cached`` True when read from the disk cache.
+
     Attributes:
-        chain: The chain it was derived from.
-        q: The joint symbols ``q1..qn``.
-        joint_names: The chain's joint names, in the same order.
         lengths: Length symbol → value in [m] (what :meth:`numeric` substitutes).
         length_sources: Length symbol → the table entry it stands for (e.g. ``"d2"``).
         transforms: ``^{j-1}T_j`` for every table row (4×4 each).
@@ -65,13 +65,11 @@ class Derivation:
             finished).
         families: The singular families read off :attr:`det` (or :attr:`gram`).
         reference: Name of the frame whose axes ``p`` and ``J`` are expressed in (the base).
-        tip: Name of the tip frame.
         base_transform: ``T_base_0`` (4×4; identity without a base pose).
         tool_transform: ``T_n_tip`` (4×4; identity without a tool).
         method: How the determinant was computed (frame, wrist-centre split, Gram).
         incomplete: What could not be done, and why (empty when complete).
         seconds: CPU time of the derivation in [s] (0 when read from the cache).
-        cached: True when read from the disk cache.
         agree: Whether the direct and indirect position Jacobians are equal (``None``: not
             compared within the budget; :attr:`methods_agree` compares them).
         families_done: True when the determinant, the families and their checks were reached.
@@ -113,14 +111,9 @@ class Derivation:
         return sp.sympify(expr).subs(dict(self.lengths))
 
     def function(self, expr: Any) -> Callable[[np.ndarray], np.ndarray]:
-        """A vectorised numpy function of ``q`` for ``expr`` (lengths substituted).
+        """``f(Q)`` of a sympy expression or matrix in ``q``, lengths substituted, vectorised.
 
-        Args:
-            expr: A sympy expression or matrix in the joint symbols.
-
-        Returns:
-            ``f(Q)`` with ``Q`` (n,) or (N, n): shape () or (N,), matrices (…, rows, cols).
-
+        ``Q`` (n,) or (N, n) gives shape () or (N,); matrices (…, rows, cols).
         """
         num = self.numeric(expr)
         is_matrix = isinstance(num, sp.MatrixBase)
@@ -412,14 +405,6 @@ def _usable(
     return budget is not None and tried is not None and budget <= tried
 
 
-def _tried(found: Mapping[str, Any] | None, budget: float | None) -> float | None:
-    """The budget an unfinished run is kept with: the larger of this one and the earlier."""
-    before = (found or {}).get(ATTEMPT)
-    if budget is not None and before is not None and before[1] is not None:
-        return max(budget, before[1])
-    return budget
-
-
 def _checked_load(
     chain: Chain, lengths: Any, digest: str, then: str, stacklevel: int = 2
 ) -> dict[str, Any] | None:
@@ -503,11 +488,7 @@ def derive(
     """
     if budget is not None and (not isinstance(budget, (int, float)) or not budget > 0):
         raise ParameterError(f"budget={budget!r} is not allowed; a time in seconds > 0 or None")
-    chain, reference, tip_name = _chain_of(source, base, tip)
-    if rows is not None:
-        row_indices(rows)
-    syms = _core.length_symbols(chain, lengths)  # validates names early
-    digest = _cache_key(chain, rows, lengths)
+    chain, reference, tip_name, syms, digest = _start(source, base, tip, rows, lengths)
     found = _MEMO.get(digest) if cache else None
     run_for = budget if within is None else min(within, budget or math.inf)
     done: dict[str, Any] = {}
@@ -537,7 +518,10 @@ def derive(
     else:
         write = cache and not unread
         have = {k: v for k, v in (found or {}).items() if k != ATTEMPT}
-        tried = _tried(found, budget)
+        before = (found or {}).get(ATTEMPT)  # kept with the larger of this budget and the last
+        tried = budget
+        if budget is not None and before is not None and before[1] is not None:
+            tried = max(budget, before[1])
         if reason is not None and cache:
             _cache.sweep(digest)
         stages = {**have, **done}
@@ -556,6 +540,15 @@ def derive(
             _MEMO.clear()
         _MEMO[digest] = stages
     return _assemble(chain, reference, tip_name, syms, stages, reason, from_cache, rows)
+
+
+def _start(source: Any, base: Any, tip: Any, rows: Any, lengths: Any) -> tuple[Any, ...]:
+    """``(chain, reference, tip, length symbols, cache key)``, the arguments checked first."""
+    chain, reference, tip_name = _chain_of(source, base, tip)
+    if rows is not None:
+        row_indices(rows)
+    syms = _core.length_symbols(chain, lengths)  # validates names early
+    return chain, reference, tip_name, syms, _cache_key(chain, rows, lengths)
 
 
 def _assemble(
@@ -610,13 +603,8 @@ def cached(source: Any, rows: str | Sequence[str] | None = None) -> Derivation |
 
     Never runs sympy's derivation; ``source``, ``rows`` and the errors
     (:class:`~hexapod_kin.exceptions.ParameterError`) are those of :func:`derive`.
-
     """
-    chain, reference, tip_name = _chain_of(source, None, None)
-    if rows is not None:
-        row_indices(rows)
-    digest = _cache_key(chain, rows, None)
-    syms = _core.length_symbols(chain, None)
+    chain, reference, tip_name, syms, digest = _start(source, None, None, rows, None)
     stages = _MEMO.get(digest)
     if stages is None:
         stages = _checked_load(chain, None, digest, "not used", stacklevel=3)
