@@ -358,6 +358,7 @@ def test_singular_family_drawn_when_near(browser):
         page.close()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("source", ["hexapod", "erd:solo12"])
 def test_physics_mode_walks_and_a_click_pushes(browser, source):
     """Physics mode (MuJoCo, closed-loop controller; servo kind for the hexapod, torque kind

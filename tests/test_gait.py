@@ -220,6 +220,7 @@ CASES = [
 ]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("pattern", "ground", "velocity"), CASES)
 def test_walks_ten_seconds_stable_no_slip_within_limits(wb, pattern, ground, velocity):
     # issue 22 changed the physics of two cases: the wave on the slope needs 10.5 rad/s at an

@@ -390,6 +390,7 @@ def _unsealed(folder: Path) -> str:
                                     pytest.param(_unsealed, marks=pytest.mark.slow)],
                          ids=["flipped-byte", "swapped", "emptied-index", "foreign-file",
                               "unsealed"])  # fmt: skip
+@pytest.mark.slow
 def test_numba_cache_not_sealed_is_never_loaded(
     sealed_cache: Path, tmp_path: Path, damage: Callable[[Path], str]
 ) -> None:
