@@ -172,6 +172,7 @@ def test_hold_w_walks_and_switch_keeps_margins(browser, session):
     page.close()
 
 
+@pytest.mark.slow
 def test_second_page_and_bad_messages(browser, session):
     _reset(session)
     a, b = _open(browser, session), _open(browser, session)

@@ -544,6 +544,7 @@ def _changed(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.mean(np.abs(a - b).max(axis=-1) > 0.1))
 
 
+@pytest.mark.slow
 @pytest.mark.browser
 def test_walk_html_opens_offline_and_moves(browser, tmp_path, capsys):
     path = tmp_path / "walk.html"

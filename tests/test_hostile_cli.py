@@ -647,6 +647,7 @@ def _start_scheduler() -> tuple[subprocess.Popen[str], str]:
     raise AssertionError("the Dask scheduler did not start")
 
 
+@pytest.mark.slow
 def test_dask_scheduler_killed_mid_sweep(tmp_path: Path, record_property) -> None:
     """One line, status 2; the chunks left are plain scores, and the next run finishes from
     them to the same table as an undisturbed run."""
@@ -878,6 +879,7 @@ sys.exit(3)
         ),
     ],
 )
+@pytest.mark.slow
 def test_api_refuses_unbounded_work_at_once(
     tmp_path: Path, imports, call, parameter, phrase, record_property
 ) -> None:

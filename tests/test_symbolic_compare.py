@@ -173,6 +173,7 @@ def test_default_rows_and_named_rows_share_one_derivation():
     assert not other.cached and other.rows == ("x", "y", "z") and other.det is None
 
 
+@pytest.mark.slow
 def test_without_fork_the_stages_run_inline_with_the_same_result(monkeypatch):
     import multiprocessing
 
