@@ -122,6 +122,7 @@ def test_aligned_chain_rotations_map_z_to_the_axis():
         assert np.linalg.det(a) == pytest.approx(1.0, abs=1e-15)
 
 
+@pytest.mark.slow
 def test_the_tree_fk_benchmark_runs_and_its_engines_agree():
     """tools/bench_tree_fk.py (why fk_batch stays compiled) in quick mode: every row carries
     its peer's time and the engines agree to rounding (timings are not asserted)."""

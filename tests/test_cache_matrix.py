@@ -468,6 +468,7 @@ NUMBA_SLOW = {("numba", d) for d in NUMBA_DAMAGES}
         for c, d in CASES
     ],
 )
+@pytest.mark.slow
 def test_damaged_cache(
     filled: dict[str, Any],
     tmp_path_factory: pytest.TempPathFactory,

@@ -280,6 +280,7 @@ def test_hardware_loop_runs_the_controller_through_callbacks() -> None:
 
 
 # ----------------------------------------------------------------------------- closed loop
+@pytest.mark.slow
 def test_quadruped_stands_under_torque_control() -> None:
     res = run("erd:solo12", command=Command(mode="stand"), duration=1.0)
     assert not res.fell and not res.non_foot_contacts
@@ -287,6 +288,7 @@ def test_quadruped_stands_under_torque_control() -> None:
     assert np.ptp(res.position[:, 2]) < 0.005
 
 
+@pytest.mark.slow
 def test_state_estimate_follows_the_simulator() -> None:
     """The Kalman filter's base estimate against MuJoCo's state, the controller on it."""
     res = run("erd:anymal", pattern="trot", command=(0.5, 0.0, 0.0), duration=2.0, estimate=True)
@@ -318,6 +320,7 @@ def test_stand_up_from_lying(robot, body: str) -> None:
     assert abs(res.max_roll) < math.radians(1.0) and abs(res.max_pitch) < math.radians(1.0)
 
 
+@pytest.mark.slow
 def test_open_loop_beside_closed_loop(tmp_path, capsys) -> None:
     """simulate --control: the plan replayed and walked under the controller, one page."""
     from hexapod_kin.cli import main

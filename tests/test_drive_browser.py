@@ -172,6 +172,7 @@ def test_hold_w_walks_and_switch_keeps_margins(browser, session):
     page.close()
 
 
+@pytest.mark.slow
 def test_second_page_and_bad_messages(browser, session):
     _reset(session)
     a, b = _open(browser, session), _open(browser, session)
@@ -358,6 +359,7 @@ def test_singular_family_drawn_when_near(browser):
         page.close()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("source", ["hexapod", "erd:solo12"])
 def test_physics_mode_walks_and_a_click_pushes(browser, source):
     """Physics mode (MuJoCo, closed-loop controller; servo kind for the hexapod, torque kind

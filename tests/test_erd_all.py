@@ -124,6 +124,7 @@ def test_meshes_of_a_file_path_resolve_like_ros(name: str) -> None:
     assert all(str(Path(m).resolve()).startswith(str(erd_share().resolve())) for m in meshes)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", FILES, ids=[str(p.relative_to(ROBOTS)) for p in FILES])
 def test_erd_file_reduced_to_each_default_tip_matches_raw_pinocchio(path: Path) -> None:
     """The default load (the model reduced to the path to a tip, every other joint locked at

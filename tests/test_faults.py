@@ -132,6 +132,7 @@ def test_numba_cache_on_a_full_disk_compiles_in_memory(
     [("derive", "hexabot_leg"), ("scan", "hexabot_leg", "--families", "derive", "--json")],
     ids=["derive", "scan"],
 )
+@pytest.mark.slow
 def test_package_cache_on_a_full_disk(
     full_disk: Path,
     tmp_path: Path,
@@ -160,6 +161,7 @@ def test_package_cache_on_a_full_disk(
         assert not list((full_disk / "cache").rglob("*.json"))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", ["derive", "scan"])
 def test_cache_path_that_is_a_regular_file_says_so(
     tmp_path: Path,

@@ -298,6 +298,7 @@ def test_near_perpendicular_axis_is_snapped_with_its_bound():
     assert exact.snaps == () and _fk_error(exact.chain, model) < 1e-12
 
 
+@pytest.mark.slow
 @pytest.mark.filterwarnings("ignore::hexapod_kin.UrdfWarning")
 def test_phantomx_derive_and_scan_from_the_cli(capsys, tmp_path, monkeypatch):
     import json

@@ -220,6 +220,7 @@ CASES = [
 ]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("pattern", "ground", "velocity"), CASES)
 def test_walks_ten_seconds_stable_no_slip_within_limits(wb, pattern, ground, velocity):
     # issue 22 changed the physics of two cases: the wave on the slope needs 10.5 rad/s at an
@@ -543,6 +544,7 @@ def _changed(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.mean(np.abs(a - b).max(axis=-1) > 0.1))
 
 
+@pytest.mark.slow
 @pytest.mark.browser
 def test_walk_html_opens_offline_and_moves(browser, tmp_path, capsys):
     path = tmp_path / "walk.html"

@@ -271,6 +271,7 @@ def _chain_urdf(n_links: int, moving: int | None = None) -> str:
         ("dof_128", MAX_DOF + 1, None, None, ""),
     ],
 )
+@pytest.mark.slow
 def test_long_chains_in_child(
     tmp_path: Path,
     name: str,

@@ -218,6 +218,7 @@ def run_mutations(max_examples: int, crash_file: str) -> None:
     print(outcomes)
 
 
+@pytest.mark.slow
 def test_mutations_never_crash(tmp_path: Path) -> None:
     crash_file = tmp_path / "current_mutant.urdf"
     code = (

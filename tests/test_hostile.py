@@ -326,6 +326,7 @@ COMMANDS = {
 CHILD_CASES = [(cmd, case) for cmd, (cases, _, _) in COMMANDS.items() for case in cases]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("command", "case"), CHILD_CASES, ids=[f"{c}-{k}" for c, k in CHILD_CASES])
 def test_hostile_user_file_on_the_command_line(tmp_path: Path, command: str, case: str) -> None:
     """One line, exit 2, within 1 s of CPU and 1 GB (the probe: 23.6 s and 2.3 GB for a bomb).

@@ -604,6 +604,7 @@ CHUNK_DAMAGES = (
 )  # fmt: skip
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("how", CHUNK_DAMAGES)
 def test_damaged_sweep_chunks(tmp_path: Path, sweep_state, how: str, record_property) -> None:
     """Recomputed with one warning line; the table is the undamaged one; no code ran."""
@@ -646,6 +647,7 @@ def _start_scheduler() -> tuple[subprocess.Popen[str], str]:
     raise AssertionError("the Dask scheduler did not start")
 
 
+@pytest.mark.slow
 def test_dask_scheduler_killed_mid_sweep(tmp_path: Path, record_property) -> None:
     """One line, status 2; the chunks left are plain scores, and the next run finishes from
     them to the same table as an undisturbed run."""
@@ -877,6 +879,7 @@ sys.exit(3)
         ),
     ],
 )
+@pytest.mark.slow
 def test_api_refuses_unbounded_work_at_once(
     tmp_path: Path, imports, call, parameter, phrase, record_property
 ) -> None:
@@ -1014,6 +1017,7 @@ def scanned(tmp_path_factory) -> tuple[Path, Run]:
     ],
     ids=["T12-l1-l2", "T34-l3-l1", "T01-cos-sin"],
 )
+@pytest.mark.slow
 def test_resealed_derivation_is_not_printed(
     tmp_path: Path, monkeypatch, secret: bool, old: str, new: str, record_property, derived
 ) -> None:
@@ -1037,6 +1041,7 @@ def _families_factor(cache: Path) -> str:
     return next(f["factor"] for f in fams if f["joint"] is None)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("secret", [True, False], ids=["with-secret", "without-secret"])
 @pytest.mark.parametrize("edit", ["constant", "coefficient", "explicit-value"])
 def test_resealed_families_do_not_change_the_scan(

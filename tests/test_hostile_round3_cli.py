@@ -390,6 +390,7 @@ def _unsealed(folder: Path) -> str:
                                     pytest.param(_unsealed, marks=pytest.mark.slow)],
                          ids=["flipped-byte", "swapped", "emptied-index", "foreign-file",
                               "unsealed"])  # fmt: skip
+@pytest.mark.slow
 def test_numba_cache_not_sealed_is_never_loaded(
     sealed_cache: Path, tmp_path: Path, damage: Callable[[Path], str]
 ) -> None:
@@ -411,6 +412,7 @@ def test_numba_cache_not_sealed_is_never_loaded(
     assert diff < 1e-12 and not [ln for ln in lines if "warning" in ln], lines
 
 
+@pytest.mark.slow
 def test_a_new_specialisation_is_sealed_for_the_next_process(
     sealed_cache: Path, tmp_path: Path
 ) -> None:

@@ -348,6 +348,7 @@ def test_the_jacobi_sweeps_compile_once(tmp_path):
     assert res.stdout.split() == ["1", "1"]
 
 
+@pytest.mark.slow
 def test_precompile_in_child_processes(monkeypatch: pytest.MonkeyPatch):
     """Areas in parallel children (their seconds, in the order asked), a failed child's area
     compiled here instead, and the arguments checked."""

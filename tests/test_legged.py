@@ -616,6 +616,7 @@ def test_a_default_stance_with_no_joint_room_is_replaced_by_the_roomiest(tmp_pat
     assert run.min_margin > 0 and run.min_limit_margin > 0
 
 
+@pytest.mark.slow
 def test_a_robot_without_mass_is_refused_in_one_line(tmp_path):
     path = tmp_path / "massless.urdf"
     path.write_text(_upturned_hexapod(False))

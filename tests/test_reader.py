@@ -61,6 +61,7 @@ def test_planted_code_never_runs(tmp_path: Path) -> None:
     assert not marker.exists()
 
 
+@pytest.mark.slow
 def test_planted_cache_entry_is_discarded_not_run(tmp_path: Path, monkeypatch) -> None:
     """Code planted in a stored expression of the symbolic cache never runs: the next
     ``derive`` (a new process) discards the entry with one warning line and recomputes."""
@@ -99,6 +100,7 @@ def _entry(pairs: list, name: str) -> dict:
     return next(v for k, v in pairs if k == name)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("what", ["p", "det", "family"])
 def test_edited_cache_values_are_recomputed(tmp_path: Path, monkeypatch, what: str) -> None:
     """An edited value in the symbolic cache (a plausible expression, no code, the seal

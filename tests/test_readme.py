@@ -152,6 +152,7 @@ def _check_legged(shown: dict[str, Any]) -> None:
 CHECKS = [_check_tour, _check_symbolic, _check_seeds, _check_stance, _check_legged]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("index", range(len(BLOCKS)))
 def test_readme_python_examples_run(index, tmp_path):
     """Each Python block runs as written, and every value its comments state is what it gives."""
@@ -191,6 +192,7 @@ def test_readme_has_command_lines():
 @pytest.mark.parametrize(
     "line", COMMAND_LINES, ids=[ln.split()[1] + str(i) for i, ln in enumerate(COMMAND_LINES)]
 )
+@pytest.mark.slow
 def test_readme_command_line_runs(
     line: str,
     tmp_path: Path,

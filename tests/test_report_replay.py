@@ -257,6 +257,7 @@ def test_damaged_or_incomplete_entry_is_not_replayed(
     assert len(said) == (0 if damage == "no-manifest" else 2), [str(w.message) for w in said]
 
 
+@pytest.mark.slow
 def test_tampered_entry_is_rebuilt_and_rewritten(env: First, tmp_path: Path) -> None:
     entry = replay.runs_dir() / env.key
     html = entry / "files" / "report.html"
@@ -401,6 +402,7 @@ def test_replay_imports_nothing_heavy(env: First, tmp_path: Path) -> None:
     assert json.loads((out / "verdicts.json").read_text())["replayed_from"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("resealed", [False, True])
 def test_edited_manifest_verdicts_are_not_replayed(
     env: First, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, resealed: bool

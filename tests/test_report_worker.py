@@ -27,6 +27,7 @@ def _half(tmp: Path) -> tuple[Experiments, dict, Path, bool]:
     return ctx, drawn, fdir, sent
 
 
+@pytest.mark.slow
 def test_child_and_calling_process_give_the_same_experiments_and_figures(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

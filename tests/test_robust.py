@@ -52,6 +52,7 @@ def mixed() -> object:
     )
 
 
+@pytest.mark.slow
 def test_a_controlled_member_walks_the_plans_twist_on_its_bumps(mixed) -> None:
     walked, replay = mixed.runs
     assert isinstance(walked, ControlledRun) and isinstance(replay, SimRun)
@@ -165,6 +166,7 @@ def test_the_mean_twist_is_the_log_of_the_plans_motion() -> None:
         assert mean_twist(motion, T) == pytest.approx(twist, abs=1e-12)
 
 
+@pytest.mark.slow
 def test_the_command_makes_the_motion_from_rest() -> None:
     """The controller's reference ramps from rest at ACCEL: held for T, a straight command v
     moves v T - v^2 / (2 a) (closed form); the command raised by it makes the plan's motion.

@@ -85,6 +85,7 @@ def _assert_follows_plan(sim, run) -> None:
     ["tripod", "wave", *(pytest.param(n, marks=pytest.mark.slow) for n in ("ripple", "slope")),
      "turn", pytest.param("step", marks=pytest.mark.slow)],
 )  # fmt: skip
+@pytest.mark.slow
 def test_small_feet_walk_as_planned(name: str) -> None:
     kw = dict(WALKS[name])
     if name == "step":
@@ -128,6 +129,7 @@ def _into_the_step(run) -> float:
     [n if n in ("ripple", "slope", "step") else pytest.param(n, marks=pytest.mark.slow)
      for n in WALKS],
 )  # fmt: skip
+@pytest.mark.slow
 def test_robot_feet_walk_as_planned(name: str) -> None:
     run = walk(**WALKS[name])
     if not _plan_rolls(run):

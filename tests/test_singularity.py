@@ -329,6 +329,7 @@ def test_families_only_when_asked_then_from_disk_without_sympy(fresh_cache):
     assert out.stdout.split() == ["3", "False"]
 
 
+@pytest.mark.slow
 def test_families_derived_in_a_child_leave_the_caller_without_sympy(tmp_path):
     """A process that derives families (sympy, in a child) never imports sympy itself, and
     gets the same families as a process holding sympy (the derivation in a child of its own)."""

@@ -39,6 +39,7 @@ assert not loaded, f"imported {loaded}"
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("argv", COMMANDS, ids=lambda a: a[0])
 def test_command_line_work_does_not_import_numba(argv: list[str], tmp_path: Path) -> None:
     env = dict(os.environ, PYTHONPATH=str(ROOT), HEXAPOD_KIN_CACHE_DIR=str(tmp_path))

@@ -435,6 +435,7 @@ def _run_until_chunks(cmd: list[str], parts: Path, n: int, sig: int) -> int:
     return proc.returncode
 
 
+@pytest.mark.slow
 def test_interrupted_cli_sweep_resumes_to_the_same_table(local_run, tmp_path):
     out = tmp_path / "s.csv"
     parts = tmp_path / ".s.csv.sweep-parts"  # the hidden sidecar of the chunks
@@ -551,6 +552,7 @@ def test_cli_plot(tmp_path, capsys, drawn):
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("damage", ["swap", "edit", "truncate"])
 def test_damaged_chunks_are_scored_again(local_run, tmp_path, damage):
     """Chunks are checked against what they claim: swapped, edited or truncated ones are

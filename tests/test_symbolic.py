@@ -196,6 +196,7 @@ def test_ur5_det_and_families(ur5):
     assert all(f.verified for f in d.families)
 
 
+@pytest.mark.slow
 def test_ur5_from_example_robot_data_urdf():
     model = load("erd:ur5_robot")
     d = derive("erd:ur5_robot", budget=None)
@@ -360,6 +361,7 @@ def test_all_six_rows_gram_equals_numeric(name):
 
 
 # ------------------------------------------------------------------ the exact and numeric tools
+@pytest.mark.slow
 def test_ring_determinant_equals_the_expanded_one_and_numpy():
     """The ring route gives the polynomial the expression route gives; both equal numpy's det."""
     from hexapod_kin.symbolic._trigpoly import _det_poly, _to_poly, _trig_symbols, ring_det

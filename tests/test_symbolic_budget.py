@@ -208,6 +208,7 @@ def test_families_only_stops_after_the_families_and_a_full_call_carries_on(monke
     assert derive(chain, budget=None).cached and len(stages) == 2
 
 
+@pytest.mark.slow
 def test_an_entry_in_progress_answers_no_call_and_the_next_carries_on(monkeypatch):
     """A derivation running beside this one (its entry on disk after each stage) is not a stop.
 
@@ -293,6 +294,7 @@ def _timed_cli(argv: list[str], cache: Path) -> tuple[float, int, str]:
 STARTUP = 3.0
 
 
+@pytest.mark.slow
 def test_budgets_bound_the_whole_command_on_a_12_joint_chain(tmp_path):
     """``derive --budget B`` and ``scan --family-budget B`` on a chain sympy cannot finish.
 

@@ -128,6 +128,7 @@ def test_reduction_proves_pythagorean_identities_only():
     "count",
     [3, pytest.param(12, marks=pytest.mark.slow)],  # 12: ~30 s of sympy's simplify
 )
+@pytest.mark.slow
 def test_zero_decides_as_simplify_on_random_trig_polynomials(count: int) -> None:
     rng = np.random.default_rng(4)
     s1, c1, s2, c2 = sp.sin(Q[0]), sp.cos(Q[0]), sp.sin(Q[1]), sp.cos(Q[1])
@@ -172,6 +173,7 @@ def test_default_rows_and_named_rows_share_one_derivation():
     assert not other.cached and other.rows == ("x", "y", "z") and other.det is None
 
 
+@pytest.mark.slow
 def test_without_fork_the_stages_run_inline_with_the_same_result(monkeypatch):
     import multiprocessing
 

@@ -113,6 +113,7 @@ def _expected_commands(cal: Calibration, names: tuple[str, ...], q: np.ndarray) 
     return out
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(case=_case())
 def test_every_timeline_is_finite_and_within_every_range(case, tmp_path_factory) -> None:

@@ -441,6 +441,7 @@ def test_link_radius_scales_with_the_robot():
 
 
 # ====================================================================== browser: exported HTML
+@pytest.mark.slow
 def test_exported_step_renders_and_moves_offline(browser, step_html):
     path, times, _ = step_html
     page = _Page(browser, allow=("file://",))
@@ -706,6 +707,7 @@ def test_cli_animate_writes_html(tmp_path, capsys):
     assert data["animation"] and data["duration"] == pytest.approx(4.0)
 
 
+@pytest.mark.slow
 def test_screenshot_tool_runs(browser, tmp_path):
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tools"))
     try:
