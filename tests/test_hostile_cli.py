@@ -786,6 +786,7 @@ def test_six_huge_feet_give_one_line(tmp_path: Path, record_property) -> None:
     bounded(run)
 
 
+@pytest.mark.slow
 def test_feet_within_the_robot_still_stand(tmp_path: Path, record_property) -> None:
     urdf = _clean_phantomx(tmp_path)
     # the IK kernels compiled (a fresh clone's first use, ~9 s of CPU) or loaded before the
@@ -801,6 +802,7 @@ def test_feet_within_the_robot_still_stand(tmp_path: Path, record_property) -> N
     assert len(json.loads(run.stdout)["forces"]) == 6
 
 
+@pytest.mark.slow
 def test_a_stance_search_with_no_stance_fails_fast(tmp_path: Path, record_property) -> None:
     """Prismatic knees: every grid stance is out of reach (was 144 numerical IKs, 12 s)."""
     urdf = _clean_phantomx(tmp_path, prismatic_knees=True)

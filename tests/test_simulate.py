@@ -146,6 +146,7 @@ def test_robot_feet_walk_as_planned(name: str) -> None:
     _assert_follows_plan(sim, run)
 
 
+@pytest.mark.slow
 def test_negative_margin_plan_fails_the_same_check() -> None:
     # the three left legs swing together: the CoM leaves the support polygon every half cycle
     table = PhaseTable("left-right", (0.5, 0.5, 0.5, 0.0, 0.0, 0.0), 0.5)
@@ -361,6 +362,7 @@ def test_servo_gains_scale_with_the_robots_weight_and_size() -> None:
     )
 
 
+@pytest.mark.slow
 def test_anymal_crawls_in_mujoco_as_planned() -> None:
     """A quadruped from example-robot-data, replayed open-loop: every check passes (the base's
     rounded-zero inertia mended, the thigh boxes that cross the base box at rest excluded,
