@@ -548,6 +548,7 @@ def test_numba_cache_that_cannot_be_written_compiles_in_memory(
     assert not [p for p in tmp_path.rglob("*") if ".tmp" in p.name]
 
 
+@pytest.mark.slow
 def test_package_cache_on_a_full_disk_leaves_no_temporary_file(tmp_path: Path) -> None:
     """``HEXAPOD_KIN_CACHE_DIR`` where no file can grow past 4 kB: ``derive`` answers as with
     a working cache, and no temporary file is left (issue 35)."""

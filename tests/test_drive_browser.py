@@ -205,6 +205,7 @@ def test_every_key_press_reaches_the_robot(browser):
     assert r["fps"] > 0 and r["key_to_moving_ms"] > 0
 
 
+@pytest.mark.slow
 def test_joystick_walks_forward(browser, session):
     _legged(session)
     _reset(session)
@@ -236,6 +237,7 @@ def test_notebook_iframe_shows_the_page(browser, session):
     page.close()
 
 
+@pytest.mark.slow
 def test_download_is_a_servo_timeline(browser, tmp_path):
     """The page's download reads back with export.timeline's reader, in the servos' range."""
     from hexapod_kin.export.servos import Calibration

@@ -472,6 +472,7 @@ SWEEP_REFUSALS = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", sorted(SWEEP_REFUSALS))
 def test_sweep_refusal(tmp_path: Path, case: str, record_property) -> None:
     args, phrase = SWEEP_REFUSALS[case]

@@ -103,6 +103,7 @@ def _group_gone(pgid: int) -> bool:
     [["fk", "hexabot_leg", "--q", "0.1", "0.2", "0.3"], ["gait", "hexapod", "--duration", "2"]],
     ids=["fk", "gait"],
 )
+@pytest.mark.slow
 def test_ctrl_c_at_any_time_is_one_line_never_a_traceback(tmp_path: Path, args: list[str]) -> None:
     """SIGINT 0 to 400 ms (and later) after the console script starts: one line, no traceback.
 
