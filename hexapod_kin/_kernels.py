@@ -16,6 +16,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import functools
+import gc
 import itertools
 import math
 import sys
@@ -60,8 +61,9 @@ CHUNKS_PER_THREAD = 8
 MIN_CHUNK_BLOCKS = 64
 #: Joint values must be finite and below this in magnitude (as ``Model.check_q_batch``).
 Q_MAX = 1e150
-#: Seconds of CPU each area's kernels take to compile from nothing (the notice's estimate).
-COMPILE_SECONDS = {"batch": 3.0, "ik": 9.0, "singularity": 12.0}
+#: Seconds of CPU each area's kernels take to compile from nothing (the notice's estimate;
+#: measured on the project's 2-core machine: ``hexapod-kin precompile`` prints each area's).
+COMPILE_SECONDS = {"batch": 4.0, "ik": 14.0, "singularity": 20.0}
 
 
 # ------------------------------------------------------------------------ first use
@@ -140,6 +142,23 @@ def _progress(said: bool) -> Iterator[None]:
         print(f" {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
 
 
+@contextlib.contextmanager
+def _gc_paused() -> Iterator[None]:
+    """Python's cyclic garbage collector off while numba compiles, as it was after.
+
+    A compile makes millions of short-lived objects; the collections they trigger took about a
+    fifth of the compile's CPU time (measured: the ik and batch areas 22 s → 17 s, 66 MB more
+    peak memory).
+    """
+    was = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was:
+            gc.enable()
+
+
 def _dispatchers() -> list[Any]:
     """The package's compiled functions loaded in this process (numba dispatchers)."""
     return [
@@ -172,7 +191,7 @@ def _first_call(area: str, run: Callable[[int, int], Any]) -> Any:
     """
     if area in _SEEN:
         return run(0, 0)
-    with _progress(_notice(area)):
+    with _progress(_notice(area)), _gc_paused():
         try:
             return _first_run(area, run)
         finally:

@@ -417,3 +417,34 @@ def test_the_thread_count_starts_no_numba_pool_and_follows_set_num_threads():
     ).stdout.split()
     assert out[0] == out[1] and int(out[0]) >= 1
     assert out[2] == "False" and out[3] == "1"
+
+
+def test_a_first_call_pauses_the_garbage_collector_and_restores_its_state(monkeypatch):
+    """The compile runs with Python's cyclic GC off (issue 34: a fifth of the compile's CPU);
+    after it, enabled or disabled as it was, also when the compile fails."""
+    import gc
+
+    from hexapod_kin import _kernels
+
+    seen: list[bool] = []
+
+    def first_run(area, run):
+        seen.append(gc.isenabled())
+        if area == "failing":
+            raise ValueError("planted")
+        return 7
+
+    monkeypatch.setattr(_kernels, "_first_run", first_run)
+    monkeypatch.setattr(_kernels, "_NOTICE", [False])
+    monkeypatch.setattr(_kernels, "seal_compiled", lambda: None)
+    try:
+        for enabled in (True, False):
+            (gc.enable if enabled else gc.disable)()
+            assert _kernels._first_call("no-such-area", lambda a, b: None) == 7
+            assert gc.isenabled() is enabled
+            with pytest.raises(ValueError, match="planted"):
+                _kernels._first_call("failing", lambda a, b: None)
+            assert gc.isenabled() is enabled
+    finally:
+        gc.enable()
+    assert seen == [False, False, False, False]
