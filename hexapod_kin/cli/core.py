@@ -340,9 +340,12 @@ def _cmd_derive(args: argparse.Namespace) -> int:
     if args.budget is not None and not (math.isfinite(args.budget) and args.budget > 0):
         msg = f"--budget {args.budget!r} is not allowed; a time in seconds > 0"
         raise ParameterError(msg, parameter="--budget", value=args.budget, allowed="> 0 s")
-    import numpy as np  # after the checks: a refusal imports no sympy
+    from .._budget import prestart, run
 
-    from .._budget import run
+    # the child's imports (sympy) beside this process's (Pinocchio); a refusal imports no sympy
+    prestart(("hexapod_kin.cli.core", "hexapod_kin.symbolic.derivation", *_SYMBOLIC))
+    import numpy as np
+
     from ..symbolic import DEFAULT_BUDGET  # no sympy in this process unless the child fails
     from ..symbolic.sources import chain_of
 
@@ -431,8 +434,20 @@ def _add_scan(sub: Any) -> None:
     )
 
 
+#: What a derivation's child imports besides its job's module.
+_SYMBOLIC = ("hexapod_kin.symbolic.checks", "hexapod_kin.symbolic.families")
+
+
 def _cmd_scan(args: argparse.Namespace) -> int:
     check_outputs(args)
+    from .._cache import folder
+
+    fresh = args.families in (None, "derive") and "sympy" not in sys.modules
+    if fresh and not any(folder("families").glob("*.json")):
+        from .._budget import prestart  # no family derived yet: the derivation's child now
+
+        prestart(("hexapod_kin.singularity.families", "hexapod_kin.symbolic.derivation",
+                  *_SYMBOLIC))  # fmt: skip
     import numpy as np
 
     from ..singularity import scan
