@@ -12,9 +12,7 @@ in the parent.
 
 from __future__ import annotations
 
-import atexit
 import contextlib
-import importlib
 import math
 import os
 import pickle
@@ -113,13 +111,12 @@ def _inline(job: Job, args: tuple[Any, ...], budget: float) -> tuple[dict[str, A
 def prestart(modules: tuple[str, ...]) -> None:
     """Start the next :func:`run`'s child now: it imports ``modules`` while this process works.
 
-    Not where :func:`run` would run inline; unused, it ends at :func:`drop` (or at exit). The
-    job's CPU budget starts when :func:`run` sends it the job.
+    Unused, :func:`drop` ends it (else it ends with this process). Its job's budget starts
+    when :func:`run` sends the job.
     """
     if not (_SPARE or _ENDS or not hasattr(signal, "setitimer")):
         with contextlib.suppress(OSError):
             _SPARE.append(Child(None, modules, None))
-            atexit.register(drop)
 
 
 def drop() -> None:
@@ -170,7 +167,6 @@ class Child:
 
     def __init__(self, job: Job | None, args: tuple[Any, ...], budget: float | None) -> None:
         self._budget = budget
-        self._path = list(sys.path)
         #: Why the job stopped early (None: it finished; see :func:`run`).
         self.reason: str | None = "the budgeted process ended unexpectedly"
         read, write = os.pipe()
@@ -195,7 +191,7 @@ class Child:
         self._items: Any = os.fdopen(read, "rb")
         try:
             assert self._proc.stdin is not None
-            pickle.dump(self._path, self._proc.stdin)
+            pickle.dump(list(sys.path), self._proc.stdin)
             self._proc.stdin.flush()
         except OSError:  # gone already: no items
             self.close(wait=0.0)
@@ -206,11 +202,9 @@ class Child:
         """Give the child its job; False (then it is ended) when it cannot take it."""
         proc, self._budget = self._proc, budget
         try:
-            if proc is None or proc.stdin is None or self._path != sys.path:
-                raise OSError("no child, or another sys.path")
-            with proc.stdin:
-                pickle.dump((job, args, budget), proc.stdin)
-        except (OSError, ValueError):  # gone already (or its stdin closed): no items
+            with proc.stdin as stdin:  # type: ignore[union-attr]
+                pickle.dump((job, args, budget), stdin)
+        except (OSError, ValueError, AttributeError):  # gone already: no items
             self.close(wait=0.0)
             return False
         return True
@@ -283,7 +277,7 @@ def _serve() -> None:  # pragma: no cover - runs in the child
     try:
         for name in sys.argv[2:]:  # a prestarted child's imports, ahead of its job
             with contextlib.suppress(Exception):
-                importlib.import_module(name)
+                __import__(name)
         # unpickling imports the job's modules: told to stop meanwhile, the child ends quietly
         job, args, budget = pickle.load(sys.stdin.buffer)
         if budget is not None:

@@ -342,8 +342,7 @@ def _cmd_derive(args: argparse.Namespace) -> int:
         raise ParameterError(msg, parameter="--budget", value=args.budget, allowed="> 0 s")
     from .._budget import prestart, run
 
-    # the child's imports (sympy) beside this process's (Pinocchio); a refusal imports no sympy
-    prestart(("hexapod_kin.cli.core", "hexapod_kin.symbolic.derivation", *_SYMBOLIC))
+    prestart(("hexapod_kin.cli.core", *_SYMPY))  # sympy there, Pinocchio here
     import numpy as np
 
     from ..symbolic import DEFAULT_BUDGET  # no sympy in this process unless the child fails
@@ -435,19 +434,17 @@ def _add_scan(sub: Any) -> None:
 
 
 #: What a derivation's child imports besides its job's module.
-_SYMBOLIC = ("hexapod_kin.symbolic.checks", "hexapod_kin.symbolic.families")
+_SYMPY = ("hexapod_kin.symbolic.derivation", "hexapod_kin.symbolic.checks", "sympy.tensor.tensor")
 
 
 def _cmd_scan(args: argparse.Namespace) -> int:
     check_outputs(args)
+    from .._budget import prestart
     from .._cache import folder
 
     fresh = args.families in (None, "derive") and "sympy" not in sys.modules
-    if fresh and not any(folder("families").glob("*.json")):
-        from .._budget import prestart  # no family derived yet: the derivation's child now
-
-        prestart(("hexapod_kin.singularity.families", "hexapod_kin.symbolic.derivation",
-                  *_SYMBOLIC))  # fmt: skip
+    if fresh and not any(folder("families").glob("*.json")):  # no family derived yet
+        prestart(("hexapod_kin.singularity.families", *_SYMPY))  # the derivation's child
     import numpy as np
 
     from ..singularity import scan
