@@ -24,7 +24,7 @@ import warnings
 from collections.abc import Callable, Iterator
 from typing import Any
 
-__all__ = ["BudgetReached", "Child", "cpu_limit", "drop", "prestart", "run"]
+__all__ = ["BudgetReached", "Child", "cpu_limit", "drop", "prestart", "run", "start"]
 
 Job = Callable[..., Iterator[tuple[str, Any]]]
 
@@ -109,18 +109,20 @@ def _inline(job: Job, args: tuple[Any, ...], budget: float) -> tuple[dict[str, A
 
 
 def prestart(modules: tuple[str, ...]) -> None:
-    """Start the next :func:`run`'s child now: it imports ``modules`` while this process works.
-
-    Unused, :func:`drop` ends it (else it ends with this process). Its job's budget starts
-    when :func:`run` sends the job.
-    """
+    """Start the next child now (it imports ``modules`` meanwhile); unused, :func:`drop` ends it."""
     if not (_SPARE or _ENDS or not hasattr(signal, "setitimer")):
         with contextlib.suppress(OSError):
             _SPARE.append(Child(None, modules, None))
 
 
+def start(job: Job, args: tuple[Any, ...], budget: float | None) -> Child:
+    """A :class:`Child` of ``job(*args)``: the prestarted one if it takes the job, else new."""
+    spare = _SPARE.pop() if _SPARE else None
+    return spare if spare and spare.send(job, args, budget) else Child(job, args, budget)
+
+
 def drop() -> None:
-    """End the child of :func:`prestart` if no :func:`run` took it."""
+    """End the child of :func:`prestart` if no job took it."""
     while _SPARE:
         _SPARE.pop().close(wait=0.0)
 
@@ -142,10 +144,8 @@ def run(job: Job, args: tuple[Any, ...], budget: float | None) -> tuple[dict[str
         return {}, f"budget of {budget:g} s reached"
     if _ENDS or not hasattr(signal, "setitimer"):
         return _inline(job, args, budget)
-    try:  # the prestarted child if it takes the job, else a new one
-        child = _SPARE.pop() if _SPARE else None
-        if child is None or not child.send(job, args, budget):
-            child = Child(job, args, budget)
+    try:
+        child = start(job, args, budget)
     except OSError:
         return _inline(job, args, budget)
     try:
@@ -193,10 +193,10 @@ class Child:
             assert self._proc.stdin is not None
             pickle.dump(list(sys.path), self._proc.stdin)
             self._proc.stdin.flush()
+            if job is not None:
+                self.send(job, args, budget)
         except OSError:  # gone already: no items
             self.close(wait=0.0)
-        if job is not None:
-            self.send(job, args, budget)
 
     def send(self, job: Job, args: tuple[Any, ...], budget: float | None) -> bool:
         """Give the child its job; False (then it is ended) when it cannot take it."""
