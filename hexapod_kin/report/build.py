@@ -271,10 +271,10 @@ def _build(out: Path, *, quick: bool, animations: bool, start: float) -> tuple[R
     try:
         # the derivations first: the heat maps label their samples with the families derived
         derivations = {k: ctx.printed(k) for k in _PRINTED}
-        maps, counts = figures.heat_maps(ctx, fdir, 21 if quick else 61)
-        leg2 = figures.leg2_figure(ctx, fdir)  # (the child's step and pendulum meanwhile)
         half.experiments()  # the checks compare claims with the step and the pendulum
         verdicts = tuple(evaluate(claims, ctx))
+        maps, counts = figures.heat_maps(ctx, fdir, 21 if quick else 61)
+        leg2 = figures.leg2_figure(ctx, fdir)
         drawn = half.figures()
     finally:
         half.close()
