@@ -5,8 +5,9 @@ within a budget of **CPU time of the work**, never wall-clock time, in a fresh i
 (job, arguments, ``sys.path`` down its stdin, items back on a pipe); its ``ITIMER_PROF``
 raises :class:`BudgetReached` in the job (:func:`cpu_limit` nests): the items sent so far are
 the answer; ``RLIMIT_CPU`` ends a child stuck in C code. Inside a budgeted child, or where no
-child can start, the job runs inline. A Ctrl-C reaches the child once (``SIGTERM``: a
-``KeyboardInterrupt`` in the job); its warnings are said in the parent.
+child can start, the job runs inline; :func:`prestart` starts the next child early. A Ctrl-C
+reaches the child once (``SIGTERM``: a ``KeyboardInterrupt`` in the job); its warnings are said
+in the parent.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ import warnings
 from collections.abc import Callable, Iterator
 from typing import Any
 
-__all__ = ["BudgetReached", "Child", "cpu_limit", "run"]
+__all__ = ["BudgetReached", "Child", "cpu_limit", "drop", "prestart", "run", "start"]
 
 Job = Callable[..., Iterator[tuple[str, Any]]]
 
@@ -33,6 +34,8 @@ _ENDS: list[float] = []
 _HARD_SLACK = 3.0
 #: Wall seconds a child interrupted by a Ctrl-C may take to clean up (then it is killed).
 _CLEANUP = 10.0
+#: A child started ahead of its job (:func:`prestart`): the next :func:`run` takes it.
+_SPARE: list[Child] = []
 #: The child's start: read its inputs, then serve (``python -c``; no ``__main__`` re-run).
 _BOOT = (
     "import sys, pickle; sys.path[:] = pickle.load(sys.stdin.buffer); "
@@ -105,6 +108,25 @@ def _inline(job: Job, args: tuple[Any, ...], budget: float) -> tuple[dict[str, A
     return done, None
 
 
+def prestart(modules: tuple[str, ...]) -> None:
+    """Start the next child now (it imports ``modules`` meanwhile); unused, :func:`drop` ends it."""
+    if not (_SPARE or _ENDS or not hasattr(signal, "setitimer")):
+        with contextlib.suppress(OSError):
+            _SPARE.append(Child(None, modules, None))
+
+
+def start(job: Job, args: tuple[Any, ...], budget: float | None) -> Child:
+    """A :class:`Child` of ``job(*args)``: the prestarted one if it takes the job, else new."""
+    spare = _SPARE.pop() if _SPARE else None
+    return spare if spare and spare.send(job, args, budget) else Child(job, args, budget)
+
+
+def drop() -> None:
+    """End the child of :func:`prestart` if no job took it."""
+    while _SPARE:
+        _SPARE.pop().close(wait=0.0)
+
+
 def run(job: Job, args: tuple[Any, ...], budget: float | None) -> tuple[dict[str, Any], str | None]:
     """Run ``job(*args)`` within ``budget`` seconds of CPU time (see the module docstring).
 
@@ -123,7 +145,7 @@ def run(job: Job, args: tuple[Any, ...], budget: float | None) -> tuple[dict[str
     if _ENDS or not hasattr(signal, "setitimer"):
         return _inline(job, args, budget)
     try:
-        child = Child(job, args, budget)
+        child = start(job, args, budget)
     except OSError:
         return _inline(job, args, budget)
     try:
@@ -139,10 +161,11 @@ def run(job: Job, args: tuple[Any, ...], budget: float | None) -> tuple[dict[str
 class Child:
     """``job(*args)`` in a fresh interpreter (:func:`run`'s child; ``budget`` None: no limit).
 
+    ``job`` None: the child imports the modules named by ``args`` and waits for :meth:`send`.
     Raises :class:`OSError` when no child can be started.
     """
 
-    def __init__(self, job: Job, args: tuple[Any, ...], budget: float | None) -> None:
+    def __init__(self, job: Job | None, args: tuple[Any, ...], budget: float | None) -> None:
         self._budget = budget
         #: Why the job stopped early (None: it finished; see :func:`run`).
         self.reason: str | None = "the budgeted process ended unexpectedly"
@@ -152,7 +175,8 @@ class Child:
         held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
         try:
             self._proc: subprocess.Popen[bytes] | None = subprocess.Popen(  # noqa: S603
-                [sys.executable, "-c", _BOOT, str(write)],  # this interpreter, our bootstrap
+                # this interpreter, our bootstrap (and the modules to import ahead of a job)
+                [sys.executable, "-c", _BOOT, str(write), *(args if job is None else ())],
                 stdin=subprocess.PIPE,
                 pass_fds=(write,),
                 close_fds=True,
@@ -167,11 +191,23 @@ class Child:
         self._items: Any = os.fdopen(read, "rb")
         try:
             assert self._proc.stdin is not None
-            with self._proc.stdin:
-                pickle.dump(list(sys.path), self._proc.stdin)
-                pickle.dump((job, args, budget), self._proc.stdin)
+            pickle.dump(list(sys.path), self._proc.stdin)
+            self._proc.stdin.flush()
+            if job is not None:
+                self.send(job, args, budget)
         except OSError:  # gone already: no items
             self.close(wait=0.0)
+
+    def send(self, job: Job, args: tuple[Any, ...], budget: float | None) -> bool:
+        """Give the child its job; False (then it is ended) when it cannot take it."""
+        proc, self._budget = self._proc, budget
+        try:
+            with proc.stdin as stdin:  # type: ignore[union-attr]
+                pickle.dump((job, args, budget), stdin)
+        except (OSError, ValueError, AttributeError):  # gone already: no items
+            self.close(wait=0.0)
+            return False
+        return True
 
     def items(self) -> Iterator[tuple[str, Any]]:
         """The job's ``(name, value)`` items until it ends (its warnings said here, once)."""
@@ -239,6 +275,9 @@ def _serve() -> None:  # pragma: no cover - runs in the child
 
     warnings.showwarning = forward
     try:
+        for name in sys.argv[2:]:  # a prestarted child's imports, ahead of its job
+            with contextlib.suppress(Exception):
+                __import__(name)
         # unpickling imports the job's modules: told to stop meanwhile, the child ends quietly
         job, args, budget = pickle.load(sys.stdin.buffer)
         if budget is not None:

@@ -341,6 +341,76 @@ def test_derive_command_starts_one_child(monkeypatch, capsys, tmp_path):
     assert "det J[x,y,z] = l2·l3·(l1 + l2·cos(q2) + l3·cos(q2 + q3))·sin(q3)" in out
 
 
+def test_a_prestarted_child_takes_the_next_job_or_is_ended(monkeypatch):
+    """``_budget.prestart`` starts the next budgeted child ahead (its imports beside the
+    caller's work): the next ``run`` sends it the job (one process in all, the job's items
+    back); one that no job takes is ended by ``drop``."""
+    import subprocess
+
+    from hexapod_kin import _budget
+
+    started: list[list[str]] = []
+    real = subprocess.Popen
+
+    def counting(argv, *a, **kw):
+        started.append(list(argv))
+        return real(argv, *a, **kw)
+
+    monkeypatch.setattr(subprocess, "Popen", counting)
+    _budget.prestart(("json",))
+    assert _budget.run(zip, (("a", "b"), (1, 2)), 30.0) == ({"a": 1, "b": 2}, None)
+    assert [argv[4:] for argv in started] == [["json"]] and not _budget._SPARE
+    _budget.prestart(("json",))
+    (spare,) = _budget._SPARE
+    _budget.drop()
+    assert spare._proc is None and not _budget._SPARE and len(started) == 2
+
+
+_FIRST_SCAN = """
+import json, subprocess, sys
+started, real = [], subprocess.Popen
+def counting(argv, *a, **kw):
+    started.append(list(argv))
+    return real(argv, *a, **kw)
+subprocess.Popen = counting
+from hexapod_kin.cli import main
+status = main(["scan", "hexabot_leg", "--grid", "7"])
+print(json.dumps([status, [argv[4:] for argv in started], "sympy" in sys.modules]))
+"""
+
+
+@pytest.mark.slow  # two fresh processes, one derivation (~5 s of CPU)
+def test_a_first_scan_starts_the_family_child_as_it_starts(tmp_path):
+    """A scan with no family derived yet starts the derivation's child (sympy imported there)
+    as the command starts; the derivation runs in it: one child, no sympy here, the leg's
+    three families. With the families on disk: no child, the same families."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, HEXAPOD_KIN_CACHE_DIR=str(tmp_path))
+    runs = [
+        subprocess.run(
+            [sys.executable, "-c", _FIRST_SCAN],
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=600,
+            check=False,
+        )
+        for _ in range(2)  # fmt: skip
+    ]
+    (first, *_), (second, *_) = (r.stdout.splitlines()[::-1] for r in runs)
+    ahead = ["hexapod_kin.singularity.families", "hexapod_kin.symbolic.derivation"]
+    status, children, sympy_here = json.loads(first)
+    assert (status, len(children), children[0][:2], sympy_here) == (0, 1, ahead, False), runs[0]
+    assert json.loads(second) == [0, [], False], runs[1]
+    for run in runs:
+        assert "family l1 + l2*cos(q2) + l3*cos(q2 + q3) = 0" in run.stdout
+        assert "family q3 = 0 (mod 2*pi)" in run.stdout and "family q3 = pi" in run.stdout
+
+
 @pytest.mark.slow
 def test_derive_gives_the_same_bytes_beside_eight_busy_processes(tmp_path):
     """Budgets count CPU time: ``derive`` and ``scan`` (its families derived within their

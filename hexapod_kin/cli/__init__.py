@@ -177,6 +177,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         with lock:
             active[0] = False
         sys.unraisablehook = hook
+        if (budget := sys.modules.get("hexapod_kin._budget")) is not None:
+            budget.drop()  # a child started ahead of a job that never came
         if previous is not None:
             signal.signal(signal.SIGINT, signal.SIG_IGN if _ENTRY[0] else previous)
     if interrupted and status != 130:

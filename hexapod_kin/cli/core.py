@@ -340,9 +340,11 @@ def _cmd_derive(args: argparse.Namespace) -> int:
     if args.budget is not None and not (math.isfinite(args.budget) and args.budget > 0):
         msg = f"--budget {args.budget!r} is not allowed; a time in seconds > 0"
         raise ParameterError(msg, parameter="--budget", value=args.budget, allowed="> 0 s")
-    import numpy as np  # after the checks: a refusal imports no sympy
+    from .._budget import prestart, run
 
-    from .._budget import run
+    prestart(("hexapod_kin.cli.core", *_SYMPY))  # sympy there, Pinocchio here
+    import numpy as np
+
     from ..symbolic import DEFAULT_BUDGET  # no sympy in this process unless the child fails
     from ..symbolic.sources import chain_of
 
@@ -431,8 +433,18 @@ def _add_scan(sub: Any) -> None:
     )
 
 
+#: What a derivation's child imports besides its job's module.
+_SYMPY = ("hexapod_kin.symbolic.derivation", "hexapod_kin.symbolic.checks", "sympy.tensor.tensor")
+
+
 def _cmd_scan(args: argparse.Namespace) -> int:
     check_outputs(args)
+    from .._budget import prestart
+    from .._cache import folder
+
+    fresh = args.families in (None, "derive") and "sympy" not in sys.modules
+    if fresh and not any(folder("families").glob("*.json")):  # no family derived yet
+        prestart(("hexapod_kin.singularity.families", *_SYMPY))  # the derivation's child
     import numpy as np
 
     from ..singularity import scan

@@ -14,7 +14,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from .._budget import Child
+from .._budget import Child, start
 
 __all__ = ["NumericHalf"]
 
@@ -67,7 +67,7 @@ class NumericHalf:
         self._child: Child | None = None
         self._items: Iterator[tuple[str, Any]] = iter(())
         try:
-            self._child = Child(_job, (ctx.quick, *self._args), None)
+            self._child = start(_job, (ctx.quick, *self._args), None)  # prestarted, if one is
             self._items = self._child.items()
         except OSError:  # no child: its share is done here
             pass

@@ -249,6 +249,10 @@ def _replayed(entry: Any, out: Path, start: float) -> Report | None:
 
 def _build(out: Path, *, quick: bool, animations: bool, start: float) -> tuple[Report, list[Path]]:
     """Compute and write the report: the :class:`Report` and the files but ``verdicts.json``."""
+    from .._budget import prestart
+
+    # the numeric half's child, importing Pinocchio and its experiments while sympy loads here
+    prestart(("hexapod_kin.report._worker", "hexapod_kin.seeds", "hexapod_kin.dynamics.pendulum"))
     from . import figures
     from ._worker import NumericHalf
     from .checks import Context, evaluate

@@ -164,7 +164,7 @@ def _seed_ik(
     for name, text in formulas.items():
         expr = parse(text)
         syms = sorted(expr.free_symbols, key=lambda s: s.name)
-        fn = sp.lambdify(syms, expr, "numpy")
+        fn = sp.lambdify(syms, expr, np)  # np: no `from numpy import *` (0.15 s)
         with np.errstate(all="ignore"):
             value = np.asarray(fn(*[env[s.name] for s in syms]), dtype=float)
         env[name] = np.broadcast_to(value, (feet.shape[0],))

@@ -112,7 +112,7 @@ def _evaluate(exprs: Sequence[Any], env: Mapping[sp.Symbol, np.ndarray]) -> np.n
         return evaluate_matrix([list(exprs)], env, points)[:, 0, :].T.astype(complex)
     except (ValueError, TypeError):  # sympy.lambdify for what the walk does not know
         syms = sorted(env, key=str)
-        raw = sp.lambdify(syms, list(exprs), modules="numpy")(*[env[s] for s in syms])
+        raw = sp.lambdify(syms, list(exprs), modules=np)(*[env[s] for s in syms])
         return np.array([np.broadcast_to(np.asarray(v, dtype=complex), (points,)) for v in raw])
 
 

@@ -83,7 +83,7 @@ def families_of(
             mod, numeric = (" (mod 2*pi)" if revolute else ""), not sols
             if numeric:
                 lo, hi = (-math.pi, math.pi) if revolute else _prismatic_range(chain, k)
-                func = sp.lambdify(q[k], fac.subs(dict(values)), "numpy")
+                func = sp.lambdify(q[k], fac.subs(dict(values)), np)  # np: no `from numpy import *`
 
                 def one(x: np.ndarray, func: Any = func) -> np.ndarray:
                     return np.broadcast_to(np.asarray(func(x), float), np.shape(x))
@@ -121,7 +121,7 @@ def check_families(
     hi = np.where(np.isfinite(hi), hi, math.pi)
     out = []
     for fam in fams:
-        func = sp.lambdify(q, fam.factor.subs(dict(values)), "numpy")
+        func = sp.lambdify(q, fam.factor.subs(dict(values)), np)
         on, off, points = [], [], 0
         for _ in range(12):
             if points == 3:
