@@ -67,16 +67,13 @@ def _sigma3(j: list[list[float]]) -> tuple[float, float]:
 
 
 def _sigma(rows: np.ndarray) -> tuple[float, float]:
-    """(σ_min, σ_max) of a task Jacobian: the min(m, n)-th and the first singular value.
+    """(σ_min, σ_max) of a task J: its min(m, n)-th and first singular values (Eigen's Jacobi)."""
+    import eigenpy
 
-    Eigen's one-sided Jacobi SVD (eigenpy; QR-preconditioned when not square).
-    """
     m, n = rows.shape
     if n == 0:
         return 0.0, 0.0
-    import eigenpy
-
-    svd = eigenpy.NoPrecondJacobiSVD if m == n else eigenpy.ColPivHhJacobiSVD
+    svd = eigenpy.NoPrecondJacobiSVD if m == n else eigenpy.ColPivHhJacobiSVD  # QR first if not
     s = svd(rows, 0).singularValues().tolist()
     return s[-1], s[0]
 
