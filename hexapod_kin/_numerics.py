@@ -13,7 +13,7 @@ import numpy as np
 __all__ = ["chain_length", "chain_scale", "dls_step", "dls_step3", "wrap_angles"]
 
 _TWO_PI = 2.0 * math.pi
-_dot, _solve = np.dot, np.linalg.solve
+_dot = np.dot
 
 
 def wrap_angles(a: Any) -> np.ndarray:
@@ -39,10 +39,10 @@ def chain_scale(trans: Any) -> float:
 def dls_step(jac: np.ndarray, error: Any, lam2: float, free: Any = None) -> np.ndarray:
     """The damped-least-squares step ``Δq = Jfᵀ(Jf Jfᵀ + λ²I)⁻¹ e`` (twin of ``_kmath.dls_into``).
 
-    The smaller system (``(JfᵀJf + λ²I)⁻¹ Jfᵀ e`` when n ≤ m); ``Jf``: ``jac`` (m, n) with the
-    columns of frozen joints (``free``: (n,) False or 0) zeroed; ``error`` (m,) in the task's
-    units, ``lam2`` ``λ² ≥ 0`` in those squared. A stack (..., m, n) of tasks (n ≤ m) at once.
-    Zeros when singular (``λ² = 0`` at a singularity).
+    The smaller system (``(JfᵀJf + λ²I)⁻¹ Jfᵀ e`` when n ≤ m), by Cholesky (Eigen's LLT);
+    ``Jf``: ``jac`` (m, n) with the columns of frozen joints (``free``: (n,) False or 0) zeroed;
+    ``error`` (m,) in the task's units, ``lam2`` ``λ² ≥ 0`` in those squared. A stack (..., m, n)
+    of tasks (n ≤ m) at once (``np.linalg.solve``). Zeros when not positive definite.
     """
     jf = jac if free is None else jac * np.asarray(free, dtype=float)
     e = np.asarray(error, dtype=float)
@@ -51,29 +51,20 @@ def dls_step(jac: np.ndarray, error: Any, lam2: float, free: Any = None) -> np.n
         return np.linalg.solve(jt @ jf + lam2 * np.eye(jf.shape[-1]), jt @ e[..., None])[..., 0]
     m, n = jf.shape
     jt, k = jf.T, (n if n <= m else m)
-    held = _HELD[0]  # λ² I of the last positive λ² (an RK4 step's stages share it)
-    if held[0] == lam2 and held[1] == k and lam2 > 0.0:
-        damp = held[2]
-    else:
-        eye = _EYE.get(k)
-        if eye is None:
-            eye = _EYE.setdefault(k, np.eye(k))
-        damp = lam2 * eye
-        if lam2 > 0.0:
-            damp.setflags(write=False)
-            _HELD[0] = (lam2, k, damp)
-    try:
-        if n <= m:
-            return _solve(_dot(jt, jf) + damp, _dot(jt, e))
-        return _dot(jt, _solve(_dot(jf, jt) + damp, e))
-    except np.linalg.LinAlgError:
+    held = _HELD[0]  # (λ², λ² I) of the last call: an RK4 step's stages share it
+    if held[0] != lam2 or len(held[1]) != k:
+        held = _HELD[0] = (lam2, lam2 * np.eye(k))
+    import eigenpy  # Eigen's small dense decompositions (Pinocchio's own), here: on first use
+
+    llt = eigenpy.LLT(_dot(jt, jf) + held[1] if n <= m else _dot(jf, jt) + held[1])
+    if llt.info() != eigenpy.ComputationInfo.Success:  # not SPD
         return np.zeros(n)
+    x = llt.solve(_dot(jt, e) if n <= m else e).reshape(k)  # eigenpy: (1, 1) when k = 1
+    return x if n <= m else _dot(jt, x)
 
 
-#: ``(λ², k, λ² I)`` of :func:`dls_step`'s last positive ``λ²`` (read-only; replaced whole).
-_HELD: list[tuple[float, int, np.ndarray]] = [(0.0, 0, np.zeros((0, 0)))]
-#: Identity matrices by size (never written).
-_EYE: dict[int, np.ndarray] = {}
+#: ``(λ², λ² I)`` of :func:`dls_step`'s last call (never written; replaced whole).
+_HELD: list[tuple[float, np.ndarray]] = [(math.nan, np.zeros((0, 0)))]
 
 
 def dls_step3(j: list[list[float]], x: list[float], lam2: float) -> list[float] | None:

@@ -273,11 +273,12 @@ class Robot:
             raise ParameterError(msg, parameter="SOURCE", value=self.source, allowed=allowed)
         return resolved.params
 
-    def legged(self) -> Any:
-        """The legged robot (:func:`hexapod_kin.gait.robot.as_whole_body`) with its feet."""
+    def legged(self, model: Any = None) -> Any:
+        """The legged robot (:func:`hexapod_kin.gait.robot.as_whole_body`) of ``model`` (loaded)."""
         from ..gait.robot import as_whole_body
 
-        return as_whole_body(self.load(), feet=self.feet, foot_radius=self.foot_radius)
+        mdl = self.load() if model is None else model
+        return as_whole_body(mdl, feet=self.feet, foot_radius=self.foot_radius)
 
 
 def robot_of(args: argparse.Namespace) -> Robot:

@@ -106,7 +106,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     mjcf = output_path(args.mjcf, "--mjcf", (".xml", ".mjcf")) if args.mjcf else None
     robot = robot_of(args)
     model = robot.load()
-    walk = walk_options(args, robot.legged() if args.pattern is None else None)
+    walk = walk_options(args, robot.legged(model) if args.pattern is None else None)
     options = dict(feet=robot.feet, foot_radius=robot.foot_radius, stand=not args.no_stand, **walk)
     if args.control:  # open loop beside closed loop (hexapod_kin.control)
         from .control import simulate_control

@@ -14,7 +14,6 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
-from xml.sax.saxutils import escape
 
 from .. import __version__
 from .._io import atomic_write
@@ -105,6 +104,8 @@ def package_files(
         ParameterError: For an invalid name, e-mail or source.
 
     """
+    from xml.sax.saxutils import escape  # here: it imports urllib and ssl (~70 ms)
+
     src = table_of(source)
     pkg = package_name_for(src.name) if name is None else name
     if not isinstance(pkg, str) or not PACKAGE_NAME_RE.match(pkg):

@@ -29,7 +29,7 @@ from .._numerics import dls_step, dls_step3
 __all__ = ["integrate"]
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-dot, svd = np.dot, np.linalg.svd
+dot = np.dot
 
 
 def _sigma3(j: list[list[float]]) -> tuple[float, float]:
@@ -67,10 +67,14 @@ def _sigma3(j: list[list[float]]) -> tuple[float, float]:
 
 
 def _sigma(rows: np.ndarray) -> tuple[float, float]:
-    """(σ_min, σ_max) of a task Jacobian: the min(m, n)-th and the first singular value."""
-    if rows.shape[1] == 0:
+    """(σ_min, σ_max) of a task J: its min(m, n)-th and first singular values (Eigen's Jacobi)."""
+    import eigenpy
+
+    m, n = rows.shape
+    if n == 0:
         return 0.0, 0.0
-    s = svd(rows, compute_uv=False).tolist()
+    svd = eigenpy.NoPrecondJacobiSVD if m == n else eigenpy.ColPivHhJacobiSVD  # QR first if not
+    s = svd(rows, 0).singularValues().tolist()
     return s[-1], s[0]
 
 
