@@ -323,7 +323,10 @@ def sweep(
                        for k in missing}  # fmt: skip
             try:
                 for fut, res in as_completed(list(futures), with_results=True):
-                    if fut.status != "finished" or isinstance(res, BaseException):
+                    # a result in hand counts (``done`` checks it) even if its worker died
+                    # since: the future then reads "lost" though nothing is missing
+                    got = isinstance(res, np.ndarray)
+                    if isinstance(res, BaseException) or not (got or fut.status == "finished"):
                         then = "nothing was written"
                         if store is not None:
                             then = "the finished chunks are kept: run the same sweep again to "
