@@ -162,8 +162,9 @@ class KinematicModel(Model):
         key = None if reference is None else reference.lower()
         q = qs
         ready = isinstance(q, np.ndarray) and q.dtype == np.float64 and q.ndim == 2
-        if not (ready and q.shape[1] == self.nq and q.flags.c_contiguous):
-            q = np.ascontiguousarray(self.check_q_batch(qs, "Q"))
+        if not (ready and q.shape[1] == self.nq and q.flags.c_contiguous and q.flags.writeable):
+            # a read-only array would be another compiled signature (one compile, not two)
+            q = np.require(self.check_q_batch(qs, "Q"), requirements=("C", "W"))
         chain = self.cached("batch.aligned", lambda: aligned_chain(self.arrays))
         return pose_jacobian_batch(
             chain, q, pose=pose, jacobian=key, out_pose=out_pose, out_jacobian=out_jacobian,

@@ -448,3 +448,21 @@ def test_a_first_call_pauses_the_garbage_collector_and_restores_its_state(monkey
     finally:
         gc.enable()
     assert seen == [False, False, False, False]
+
+
+def test_read_only_configurations_reuse_the_compiled_signature():
+    """A read-only ``qs`` is copied, never compiled for: numba types a read-only array apart, and
+    a second signature was a second compile (~5 s) after ``precompile`` (issue 34: once)."""
+    from hexapod_kin._kernels import pose_jacobian_kernel
+    from hexapod_kin.singularity._kernel import measures_kernel
+
+    leg = load("hexabot_leg")
+    qs = leg.random_q(300, seed=4)
+    ref_fk, ref_m = leg.fk_batch(qs), list(measures_batch(leg, qs))
+    before = len(pose_jacobian_kernel.overloads), len(measures_kernel.overloads)
+    ro = qs.copy()
+    ro.setflags(write=False)
+    fk, m = leg.fk_batch(ro), list(measures_batch(leg, ro))
+    assert (len(pose_jacobian_kernel.overloads), len(measures_kernel.overloads)) == before
+    assert fk.tobytes() == ref_fk.tobytes()
+    assert [a.tobytes() for a in m] == [a.tobytes() for a in ref_m]

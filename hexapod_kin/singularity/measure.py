@@ -163,7 +163,7 @@ def measures_batch(
 
     mdl = as_model(model)
     names = selected_rows(mdl, rows)
-    q = np.ascontiguousarray(mdl.check_q_batch(qs, "qs"))
+    q = np.require(mdl.check_q_batch(qs, "qs"), requirements=("C", "W"))  # read-only: a copy
     sel = np.array([ROW_NAMES.index(r) for r in names], dtype=np.int64)
     n = q.shape[0]
 
